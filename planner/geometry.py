@@ -1,0 +1,240 @@
+"""Outlines, faces, transforms and vectorized ray casting.
+
+All arrays are float64; points are rows ``(x, y)``. Outlines are counter-clockwise,
+holes clockwise, so that every face's outward normal is its edge direction turned
+by -90 degrees (pointing away from the material, into a hole for hole faces).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.errors import InvalidModelError
+
+if TYPE_CHECKING:
+    from planner.types import StablePose
+
+__all__ = [
+    "cast_rays",
+    "make_stable_pose",
+    "point_segment_distance",
+    "polygon_centroid",
+    "ring_faces",
+    "rotation_matrix",
+    "segment_segment_distance",
+    "signed_area",
+    "wrap_angle",
+]
+
+#: Relative tolerance (of the outline's size) below which an edge is degenerate.
+EDGE_TOLERANCE = 1e-6
+
+
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray | float:
+    """Wrap angles (radians) into [-pi, pi)."""
+    return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
+
+
+def rotation_matrix(theta: float) -> np.ndarray:
+    """Counter-clockwise rotation by `theta` radians.
+
+    >>> rotation_matrix(math.pi / 2).round(12).tolist()
+    [[0.0, -1.0], [1.0, 0.0]]
+    """
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
+def rotation_matrices(theta: np.ndarray) -> np.ndarray:
+    """Stack of rotation matrices (..., 2, 2) for an array of angles."""
+    c, s = np.cos(theta), np.sin(theta)
+    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+
+
+def signed_area(ring: np.ndarray) -> float:
+    """Shoelace area: positive for a counter-clockwise ring."""
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.sum(x * np.roll(y, -1) - np.roll(x, -1) * y))
+
+
+def polygon_centroid(outline: np.ndarray, holes: Sequence[np.ndarray] = ()) -> np.ndarray:
+    """Area centroid of a polygon with holes (holes clockwise subtract)."""
+    total_area, moment = 0.0, np.zeros(2)
+    for ring in [outline, *holes]:
+        x, y = ring[:, 0], ring[:, 1]
+        xn, yn = np.roll(x, -1), np.roll(y, -1)
+        cross = x * yn - xn * y
+        total_area += 0.5 * cross.sum()
+        moment += np.array([((x + xn) * cross).sum(), ((y + yn) * cross).sum()]) / 6.0
+    return moment / total_area
+
+
+def ring_faces(rings: Sequence[np.ndarray]) -> dict[str, np.ndarray]:
+    """Faces of oriented rings: start, end, outward normal, offset, length, angle, ring."""
+    starts = np.concatenate([r for r in rings])
+    ends = np.concatenate([np.roll(r, -1, axis=0) for r in rings])
+    ring = np.concatenate([np.full(len(r), i) for i, r in enumerate(rings)])
+    edge = ends - starts
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    normal = np.stack([edge[:, 1], -edge[:, 0]], axis=1) / length[:, None]
+    return {
+        "start": starts,
+        "end": ends,
+        "normal": normal,
+        "offset": np.einsum("ij,ij->i", normal, starts),
+        "length": length,
+        "angle": np.arctan2(normal[:, 1], normal[:, 0]),
+        "ring": ring,
+    }
+
+
+def _as_ring(coords: object, field: str) -> np.ndarray:
+    try:
+        ring = np.asarray(coords, dtype=float)
+    except (TypeError, ValueError) as exc:
+        raise InvalidModelError("must be a list of [x, y] pairs of numbers", field=field) from exc
+    if ring.ndim != 2 or ring.shape[1] != 2:
+        raise InvalidModelError("must be a list of [x, y] pairs", field=field)
+    if not np.all(np.isfinite(ring)):
+        raise InvalidModelError("coordinates must be finite (no NaN or infinity)", field=field)
+    if len(ring) > 1 and np.allclose(ring[0], ring[-1]):
+        ring = ring[:-1]  # an explicitly closed ring
+    if len(ring) < 3:
+        raise InvalidModelError(f"needs at least 3 vertices, got {len(ring)}", field=field)
+    return ring
+
+
+def _check_edges(ring: np.ndarray, scale: float, field: str) -> None:
+    edge = np.roll(ring, -1, axis=0) - ring
+    length = np.hypot(edge[:, 0], edge[:, 1])
+    short = np.flatnonzero(length <= EDGE_TOLERANCE * scale)
+    if short.size:
+        raise InvalidModelError(
+            f"degenerate edge {int(short[0])} (vertices {int(short[0])} and "
+            f"{int((short[0] + 1) % len(ring))} coincide within {EDGE_TOLERANCE * scale:.3g})",
+            field=field,
+        )
+
+
+def make_stable_pose(
+    outline: object,
+    holes: Sequence[object] = (),
+    probability: float = 1.0,
+    normal_z: Sequence[float] | None = None,
+    *,
+    field: str = "outline",
+) -> StablePose:
+    """Validate and orient one stable pose (DESIGN §4.1).
+
+    Refuses fewer than 3 vertices, non-finite coordinates, self-intersection,
+    zero area, degenerate edges and holes outside the outline, naming the field.
+    The outline is re-oriented counter-clockwise and holes clockwise; vertex
+    coordinates are kept exactly as given.
+
+    >>> pose = make_stable_pose([[0, 0], [0, 1], [1, 1], [1, 0]])  # clockwise in
+    >>> pose.outline.tolist()
+    [[1.0, 0.0], [1.0, 1.0], [0.0, 1.0], [0.0, 0.0]]
+    """
+    import shapely
+
+    from planner.types import StablePose
+
+    ring = _as_ring(outline, field)
+    hole_rings = [_as_ring(h, f"{field}.holes[{i}]") for i, h in enumerate(holes)]
+    scale = float(np.ptp(ring, axis=0).max()) or 1.0
+    for i, r in enumerate([ring, *hole_rings]):
+        name = field if i == 0 else f"{field}.holes[{i - 1}]"
+        _check_edges(r, scale, name)
+        if abs(signed_area(r)) <= (EDGE_TOLERANCE * scale) ** 2:
+            raise InvalidModelError("has zero area", field=name)
+        if not shapely.LinearRing(r).is_simple:
+            raise InvalidModelError("self-intersects (bow-tie or crossing edges)", field=name)
+    polygon = shapely.Polygon(ring, hole_rings)
+    if not polygon.is_valid:
+        reason = shapely.is_valid_reason(polygon)
+        raise InvalidModelError(f"holes are not inside the outline ({reason})", field=field)
+    if signed_area(ring) < 0:
+        ring = ring[::-1].copy()
+    hole_rings = [h[::-1].copy() if signed_area(h) > 0 else h for h in hole_rings]
+    if not (math.isfinite(probability) and 0 < probability <= 1):
+        raise InvalidModelError("must lie in (0, 1]", field=f"{field}.probability")
+    nz = None
+    if normal_z is not None:
+        nz = np.asarray(normal_z, dtype=float)
+        n_faces = len(ring) + sum(len(h) for h in hole_rings)
+        if nz.shape != (n_faces,) or not np.all(np.abs(nz) <= 1):
+            raise InvalidModelError(
+                f"must hold {n_faces} numbers in [-1, 1], one per face", field=f"{field}.normal_z"
+            )
+    return StablePose(
+        outline=ring, holes=tuple(hole_rings), probability=float(probability), normal_z=nz
+    )
+
+
+def point_segment_distance(points: np.ndarray, start: np.ndarray, end: np.ndarray) -> np.ndarray:
+    """Distance from points to segments, broadcast over leading axes (last axis = xy)."""
+    edge = end - start
+    sq = np.maximum(np.sum(edge * edge, axis=-1), 1e-300)
+    u = np.clip(np.sum((points - start) * edge, axis=-1) / sq, 0.0, 1.0)
+    closest = start + u[..., None] * edge
+    return np.hypot(*np.moveaxis(points - closest, -1, 0))
+
+
+def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+
+
+def segment_segment_distance(
+    a0: np.ndarray, a1: np.ndarray, b0: np.ndarray, b1: np.ndarray
+) -> np.ndarray:
+    """Minimum distance between segments [a0, a1] and [b0, b1], broadcast (last axis = xy)."""
+    d = np.minimum(
+        np.minimum(point_segment_distance(a0, b0, b1), point_segment_distance(a1, b0, b1)),
+        np.minimum(point_segment_distance(b0, a0, a1), point_segment_distance(b1, a0, a1)),
+    )
+    ea, eb = a1 - a0, b1 - b0
+    d1, d2 = _cross(ea, b0 - a0), _cross(ea, b1 - a0)
+    d3, d4 = _cross(eb, a0 - b0), _cross(eb, a1 - b0)
+    crossing = (d1 * d2 <= 0) & (d3 * d4 <= 0) & ((d1 != d2) | (d1 != 0))
+    return np.where(crossing, 0.0, d)
+
+
+def cast_rays(
+    origins: np.ndarray,
+    directions: np.ndarray,
+    lengths: np.ndarray,
+    starts: np.ndarray,
+    ends: np.ndarray,
+    valid: np.ndarray | None = None,
+) -> tuple[np.ndarray, np.ndarray]:
+    """First hit of each ray on a set of segments, in one numpy pass.
+
+    `origins`, `directions` (unit) are (..., 2) and `lengths` (...); segments are
+    (..., F, 2) broadcast against them (leading axes align, F is the face axis).
+    A segment is hit when the ray crosses it within its length; rays that leave
+    a face from behind (starting on or inside it) still report it, so callers see
+    grazing and inner hits too. `valid` (..., F) masks faces out.
+
+    Returns (distance, face): distance along the ray (inf on a miss) and the
+    index of the face hit first (-1 on a miss).
+    """
+    o = origins[..., None, :]
+    d = directions[..., None, :]
+    e = ends - starts
+    denom = _cross(d, e)
+    w = starts - o
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = _cross(w, e) / denom
+        u = _cross(w, d) / denom
+    hit = (np.abs(denom) > 1e-15) & (t >= 0) & (u >= 0) & (u <= 1)
+    hit &= t <= lengths[..., None]
+    if valid is not None:
+        hit &= valid
+    t = np.where(hit, t, np.inf)
+    face = np.argmin(t, axis=-1)
+    dist = np.take_along_axis(t, face[..., None], axis=-1)[..., 0]
+    return dist, np.where(np.isfinite(dist), face, -1)

@@ -1,0 +1,285 @@
+"""Frozen value types shared by the whole planner.
+
+Conventions (DESIGN §2): one consistent length unit (whatever the object files
+use), angles in radians, world frame x right / y up, rotations
+counter-clockwise positive, and a pose maps model to world as
+``v_world = R(theta) v_model + t``.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+
+import numpy as np
+
+from planner import geometry
+from planner.errors import InvalidObservationError
+
+__all__ = [
+    "Contact",
+    "ErrorBound",
+    "Faces",
+    "Hypothesis",
+    "ObjectModel",
+    "Observation",
+    "Pose",
+    "SensingPath",
+    "SensorBounds",
+    "StablePose",
+    "Workspace",
+]
+
+Vec2 = tuple[float, float]
+
+
+def _finite_vec(value: Sequence[float], name: str) -> Vec2:
+    try:
+        x, y = (float(v) for v in value)
+    except (TypeError, ValueError) as exc:
+        raise InvalidObservationError("must be two numbers", field=name) from exc
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise InvalidObservationError("must be finite (no NaN or infinity)", field=name)
+    return (x, y)
+
+
+def _unit_vec(value: Sequence[float], name: str) -> Vec2:
+    x, y = _finite_vec(value, name)
+    norm = math.hypot(x, y)
+    if norm < 1e-12:
+        raise InvalidObservationError("must not be the zero vector", field=name)
+    return (x / norm, y / norm)
+
+
+@dataclass(frozen=True)
+class Pose:
+    """Rigid 2-D transform from model to world: ``v_world = R(theta) v_model + (x, y)``.
+
+    >>> Pose(1.0, 2.0, math.pi / 2).apply([[1.0, 0.0]]).round(12).tolist()
+    [[1.0, 3.0]]
+    """
+
+    x: float
+    y: float
+    theta: float
+
+    @property
+    def translation(self) -> np.ndarray:
+        return np.array([self.x, self.y])
+
+    def rotation(self) -> np.ndarray:
+        return geometry.rotation_matrix(self.theta)
+
+    def apply(self, points: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
+        """Map model points (N, 2) to the world frame."""
+        return np.asarray(points, dtype=float) @ self.rotation().T + self.translation
+
+    def inverse_apply(self, points: np.ndarray | Sequence[Sequence[float]]) -> np.ndarray:
+        """Map world points (N, 2) to the model frame."""
+        return (np.asarray(points, dtype=float) - self.translation) @ self.rotation()
+
+
+@dataclass(frozen=True)
+class SensorBounds:
+    """Bounded measurement error: contact position within `position_error` (length)
+    of the truth, measured normal within `normal_error` (radians) of the true one."""
+
+    position_error: float = 0.0
+    normal_error: float = 0.0
+
+    def __post_init__(self) -> None:
+        for name in ("position_error", "normal_error"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value < 0:
+                raise InvalidObservationError("must be a finite number >= 0", field=name)
+        if self.normal_error >= math.pi / 4:
+            raise InvalidObservationError("must be below pi/4 radians", field="normal_error")
+
+
+@dataclass(frozen=True)
+class Workspace:
+    """The safe circle: known to contain the object; every sensing path starts on it."""
+
+    center: Vec2 = (0.0, 0.0)
+    radius: float = 200.0
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "center", _finite_vec(self.center, "workspace.center"))
+        if not math.isfinite(self.radius) or self.radius <= 0:
+            raise InvalidObservationError("must be a finite number > 0", field="workspace.radius")
+
+
+@dataclass(frozen=True)
+class SensingPath:
+    """A straight sensing path: from `origin` along the unit `direction` for `length`."""
+
+    origin: Vec2
+    direction: Vec2
+    length: float
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "origin", _finite_vec(self.origin, "path.origin"))
+        object.__setattr__(self, "direction", _unit_vec(self.direction, "path.direction"))
+        if not math.isfinite(self.length) or self.length <= 0:
+            raise InvalidObservationError("must be a finite number > 0", field="path.length")
+
+    def point_at(self, distance: float) -> np.ndarray:
+        return np.asarray(self.origin) + distance * np.asarray(self.direction)
+
+    @property
+    def end(self) -> np.ndarray:
+        return self.point_at(self.length)
+
+
+@dataclass(frozen=True)
+class Contact:
+    """A touch: world contact point and measured outward unit surface normal.
+
+    `normal_z` is the optional out-of-plane component of the 3-D normal (objects
+    standing on a table, DESIGN §4.13)."""
+
+    point: Vec2
+    normal: Vec2
+    normal_z: float | None = None
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "point", _finite_vec(self.point, "contact.point"))
+        object.__setattr__(self, "normal", _unit_vec(self.normal, "contact.normal"))
+        if self.normal_z is not None and not (
+            math.isfinite(self.normal_z) and -1.0 <= self.normal_z <= 1.0
+        ):
+            raise InvalidObservationError("must lie in [-1, 1]", field="contact.normal_z")
+
+    @property
+    def normal_angle(self) -> float:
+        return math.atan2(self.normal[1], self.normal[0])
+
+
+@dataclass(frozen=True)
+class Observation:
+    """One executed sensing path and what it met (`contact is None`: a miss)."""
+
+    path: SensingPath
+    contact: Contact | None = None
+
+    def __post_init__(self) -> None:
+        if self.contact is None:
+            return
+        offset = np.asarray(self.contact.point) - np.asarray(self.path.origin)
+        along = float(offset @ np.asarray(self.path.direction))
+        if along < -1e-9 * max(1.0, self.path.length):
+            raise InvalidObservationError(
+                "contact lies behind the path origin", field="contact.point"
+            )
+
+
+@dataclass(frozen=True, eq=False)
+class Faces:
+    """The faces (edges) of one stable pose's outline and holes, in model frame.
+
+    Arrays of length F: `start`, `end` (F, 2), outward unit `normal` (F, 2),
+    `offset` d = n·v, `length`, `angle` = atan2 of the normal, `ring` (0 for the
+    outline, i for hole i)."""
+
+    start: np.ndarray
+    end: np.ndarray
+    normal: np.ndarray
+    offset: np.ndarray
+    length: np.ndarray
+    angle: np.ndarray
+    ring: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.length)
+
+    @property
+    def direction(self) -> np.ndarray:
+        return (self.end - self.start) / self.length[:, None]
+
+
+@dataclass(frozen=True, eq=False)
+class StablePose:
+    """One outline of an object (counter-clockwise, holes clockwise) and its prior.
+
+    Build it with :func:`planner.geometry.make_stable_pose`, which validates and
+    orients the rings; `normal_z` (one value per face, or None) is the
+    out-of-plane normal component of the 3-D face each outline face was cut from.
+    """
+
+    outline: np.ndarray
+    holes: tuple[np.ndarray, ...] = ()
+    probability: float = 1.0
+    normal_z: np.ndarray | None = None
+
+    @cached_property
+    def faces(self) -> Faces:
+        return Faces(**geometry.ring_faces([self.outline, *self.holes]))
+
+    @cached_property
+    def centroid(self) -> np.ndarray:
+        """Area centroid of the outline with holes (model frame)."""
+        return geometry.polygon_centroid(self.outline, self.holes)
+
+    @cached_property
+    def radius(self) -> float:
+        """Distance of the farthest vertex from the model origin."""
+        return float(np.max(np.hypot(*self.outline.T)))
+
+    @cached_property
+    def centroid_radius(self) -> float:
+        """Distance of the farthest vertex from the centroid."""
+        return float(np.max(np.hypot(*(self.outline - self.centroid).T)))
+
+    @cached_property
+    def shape(self):  # shapely.Polygon, built lazily
+        import shapely
+
+        return shapely.Polygon(self.outline, [h for h in self.holes])
+
+    def coordinates_equal(self, other: StablePose, tol: float = 0.0) -> bool:
+        if self.outline.shape != other.outline.shape or len(self.holes) != len(other.holes):
+            return False
+        rings = zip([self.outline, *self.holes], [other.outline, *other.holes], strict=True)
+        return all(a.shape == b.shape and np.allclose(a, b, atol=tol, rtol=0) for a, b in rings)
+
+
+@dataclass(frozen=True, eq=False)
+class ObjectModel:
+    """A named object with one or more stable poses and an optional prior weight."""
+
+    name: str
+    stable_poses: tuple[StablePose, ...]
+    prior: float | None = None
+
+    def same_geometry(self, other: ObjectModel) -> bool:
+        return len(self.stable_poses) == len(other.stable_poses) and all(
+            a.coordinates_equal(b) and math.isclose(a.probability, b.probability)
+            for a, b in zip(self.stable_poses, other.stable_poses, strict=True)
+        )
+
+
+@dataclass(frozen=True)
+class ErrorBound:
+    """Pose error bound: |dt| of the pose translation, |dtheta| (radians), and
+    `eps_t`, the diameter of the error disk swept along the posed outline."""
+
+    translation: float
+    rotation: float
+    eps_t: float
+
+
+@dataclass(frozen=True)
+class Hypothesis:
+    """One interpretation of the contacts: object, stable pose, face per contact
+    (None = spurious), pose with its error bound, and probability."""
+
+    object: str
+    stable_pose: int
+    assignment: tuple[int | None, ...]
+    pose: Pose
+    error_bound: ErrorBound
+    probability: float
+    equivalence_class: int = 0
+    family: int = field(default=0, compare=False)
