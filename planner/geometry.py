@@ -149,10 +149,11 @@ def make_stable_pose(
     for i, r in enumerate([ring, *hole_rings]):
         name = field if i == 0 else f"{field}.holes[{i - 1}]"
         _check_edges(r, scale, name)
+        collinear = np.linalg.matrix_rank(r - r.mean(axis=0), tol=EDGE_TOLERANCE * scale) < 2
+        if not collinear and not shapely.LinearRing(r).is_simple:
+            raise InvalidModelError("self-intersects (bow-tie or crossing edges)", field=name)
         if abs(signed_area(r)) <= (EDGE_TOLERANCE * scale) ** 2:
             raise InvalidModelError("has zero area", field=name)
-        if not shapely.LinearRing(r).is_simple:
-            raise InvalidModelError("self-intersects (bow-tie or crossing edges)", field=name)
     polygon = shapely.Polygon(ring, hole_rings)
     if not polygon.is_valid:
         reason = shapely.is_valid_reason(polygon)

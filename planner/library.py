@@ -39,7 +39,9 @@ def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
         raise ModelFileError(f"unknown keys {sorted(unknown)}", field=field)
     name = data.get("name")
     if not isinstance(name, str) or not name.strip() or len(name) > 200:
-        raise ModelFileError("must be a non-empty string of at most 200 characters", field=f"{field}.name")
+        raise ModelFileError(
+            "must be a non-empty string of at most 200 characters", field=f"{field}.name"
+        )
     if ("outline" in data) == ("stable_poses" in data):
         raise ModelFileError("give exactly one of 'outline' or 'stable_poses'", field=field)
     if "outline" in data:
@@ -87,7 +89,9 @@ def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
         or prior <= 0
     ):
         raise ModelFileError("must be a finite number > 0", field=f"{field}.prior")
-    return ObjectModel(name=name, stable_poses=tuple(poses), prior=None if prior is None else float(prior))
+    return ObjectModel(
+        name=name, stable_poses=tuple(poses), prior=None if prior is None else float(prior)
+    )
 
 
 def object_to_dict(obj: ObjectModel) -> dict[str, Any]:

@@ -1,0 +1,131 @@
+"""The simulated world: one true object lying in one stable pose at one pose.
+
+It executes sensing paths against the truth by ray casting and reports the first
+contact, perturbed anywhere inside bounded errors (the ideal probe of DESIGN §5;
+the arm and strain-gauge sensor models build on it).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+import shapely
+
+from planner.geometry import cast_rays
+from planner.types import (
+    Contact,
+    ObjectModel,
+    Observation,
+    Pose,
+    SensingPath,
+    SensorBounds,
+    StablePose,
+    Workspace,
+)
+
+__all__ = ["World", "random_world"]
+
+
+@dataclass(frozen=True)
+class World:
+    """A true object, its stable pose and pose, and the safe circle around it."""
+
+    model: ObjectModel
+    pose_index: int
+    pose: Pose
+    workspace: Workspace
+
+    @property
+    def stable(self) -> StablePose:
+        return self.model.stable_poses[self.pose_index]
+
+    def posed_faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World face starts, ends and outward normals."""
+        faces = self.stable.faces
+        rot = self.pose.rotation()
+        return self.pose.apply(faces.start), self.pose.apply(faces.end), faces.normal @ rot.T
+
+    def polygon(self) -> shapely.Polygon:
+        return shapely.Polygon(
+            self.pose.apply(self.stable.outline), [self.pose.apply(h) for h in self.stable.holes]
+        )
+
+    def first_contact(self, path: SensingPath) -> tuple[np.ndarray, int] | None:
+        """Exact first contact point and face index along `path`, or None on a miss."""
+        start, end, _ = self.posed_faces()
+        origin, direction = np.asarray(path.origin), np.asarray(path.direction)
+        dist, face = cast_rays(
+            origin[None], direction[None], np.array([path.length]), start[None], end[None]
+        )
+        if face[0] < 0:
+            return None
+        return origin + dist[0] * direction, int(face[0])
+
+    def execute(
+        self,
+        path: SensingPath,
+        bounds: SensorBounds | None = None,
+        rng: np.random.Generator | None = None,
+        edge_share: float = 0.0,
+    ) -> tuple[Observation, int | None]:
+        """Run a path; the contact is perturbed uniformly inside the bounds.
+
+        With `edge_share` > 0, that share of the perturbations lies exactly on the
+        bounds' edges (|position error| = eps_d, |normal error| = phi), the worst
+        case for soundness tests. Returns the observation and the true face index.
+        """
+        hit = self.first_contact(path)
+        if hit is None:
+            return Observation(path, None), None
+        point, face = hit
+        rng = rng or np.random.default_rng(0)
+        bounds = bounds or SensorBounds()
+        eps_d, phi = bounds.position_error, bounds.normal_error
+        on_edge = rng.random() < edge_share
+        radius = eps_d * (1.0 if on_edge else math.sqrt(rng.random()))
+        a = rng.uniform(-math.pi, math.pi)
+        point = point + radius * np.array([math.cos(a), math.sin(a)])
+        on_edge = rng.random() < edge_share
+        delta = phi * rng.choice([-1.0, 1.0]) if on_edge else rng.uniform(-phi, phi)
+        normal = self.posed_faces()[2][face]
+        angle = math.atan2(normal[1], normal[0]) + delta
+        contact = Contact((float(point[0]), float(point[1])), (math.cos(angle), math.sin(angle)))
+        return Observation(path, contact), face
+
+    def hitting_path(self, rng: np.random.Generator) -> SensingPath:
+        """A path from a random point of the safe circle aimed at a random point of the object."""
+        poly = self.polygon()
+        minx, miny, maxx, maxy = poly.bounds
+        while True:
+            aim = np.array([rng.uniform(minx, maxx), rng.uniform(miny, maxy)])
+            if poly.contains(shapely.Point(aim)):
+                break
+        return path_towards(self.workspace, rng.uniform(-math.pi, math.pi), aim)
+
+
+def path_towards(workspace: Workspace, angle: float, aim: np.ndarray) -> SensingPath:
+    """The path from the safe circle point at `angle` (radians) through `aim`, to the far side."""
+    center = np.asarray(workspace.center)
+    origin = center + workspace.radius * np.array([math.cos(angle), math.sin(angle)])
+    direction = np.asarray(aim, dtype=float) - origin
+    return SensingPath(tuple(origin), tuple(direction), 2.0 * workspace.radius)
+
+
+def random_world(
+    models: list[ObjectModel], workspace: Workspace, rng: np.random.Generator
+) -> World:
+    """A random true object (equal odds, or its prior), stable pose (by its probability)
+    and pose (uniform orientation, position keeping the object inside the safe circle)."""
+    priors = np.array([m.prior if m.prior is not None else 1.0 for m in models])
+    model = models[int(rng.choice(len(models), p=priors / priors.sum()))]
+    probs = np.array([p.probability for p in model.stable_poses])
+    pose_index = int(rng.choice(len(probs), p=probs / probs.sum()))
+    theta = rng.uniform(-math.pi, math.pi)
+    stable = model.stable_poses[pose_index]
+    # keep every vertex inside the circle: place the rotated outline's farthest point within it
+    reach = max(workspace.radius - stable.radius - 1e-6 * workspace.radius, 0.0)
+    r, a = reach * math.sqrt(rng.random()), rng.uniform(-math.pi, math.pi)
+    center = np.asarray(workspace.center) + r * np.array([math.cos(a), math.sin(a)])
+    return World(model, pose_index, Pose(float(center[0]), float(center[1]), theta), workspace)

@@ -1,0 +1,133 @@
+"""Pairwise constraint tables and their checks (DESIGN §4.2, thesis §2.3.2, App. 1).
+
+For contacts j, k (points p, measured unit normals u, ``r = p_k - p_j``) assigned
+to faces a, b of one stable pose, with position bound ``eps_d`` and normal bound
+``phi``:
+
+- distance:  ``Dmin(a,b) - 2 eps_d <= |r| <= Dmax(a,b) + 2 eps_d``
+- angle:     ``|wrap(angle(u_j -> u_k) - angle(n_a -> n_b))| <= 2 phi`` (signed: 2-D has
+  no mirror images)
+- direction: ``u_j·r`` within ``phi |r| + 2 eps_d`` of ``[Cmin(a,b), Cmax(a,b)]``, the range
+  of ``n_a·(y - x)`` over x on face a, y on face b; and the same from k to j.
+
+Tables are built once per stable pose; checks are table lookups vectorized over
+all face pairs. Pruning is sound: with errors inside the bounds the true
+assignment always passes (a tiny numeric slack guards the bounds' edges).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.geometry import segment_segment_distance, wrap_angle
+from planner.types import Contact, Faces, StablePose
+
+__all__ = ["ConstraintTables", "build_tables", "pair_feasibility", "unary_feasibility"]
+
+#: Relative slack (of the object size) added to every length bound, and absolute
+#: slack (radians) added to every angle bound, so the bounds' edges pass.
+LENGTH_SLACK = 1e-9
+ANGLE_SLACK = 1e-9
+
+
+@dataclass(frozen=True, eq=False)
+class ConstraintTables:
+    """F x F tables of one stable pose, indexed [face a, face b]."""
+
+    d_min: np.ndarray
+    d_max: np.ndarray
+    angle: np.ndarray  # signed angle from n_a to n_b
+    c_min: np.ndarray  # min over x on a, y on b of n_a·(y - x)
+    c_max: np.ndarray
+    scale: float  # object size, for the numeric slack
+
+
+def build_tables(faces: Faces) -> ConstraintTables:
+    """Distance, angle and direction tables of a stable pose's faces.
+
+    Dmax is reached at endpoints; Dmin is the segment-segment distance; since
+    ``n_a·x = d_a`` on face a, ``n_a·(y - x)`` ranges over ``n_a·y - d_a`` at b's endpoints.
+    """
+    a0, a1 = faces.start[:, None, :], faces.end[:, None, :]
+    b0, b1 = faces.start[None, :, :], faces.end[None, :, :]
+    ends_a = np.stack(np.broadcast_arrays(a0, a1), axis=0)  # (2, F, 1, 2)
+    ends_b = np.stack(np.broadcast_arrays(b0, b1), axis=0)  # (2, 1, F, 2)
+    gaps = ends_a[:, None] - ends_b[None, :]  # (2, 2, F, F, 2)
+    d_max = np.hypot(gaps[..., 0], gaps[..., 1]).max(axis=(0, 1))
+    d_min = segment_segment_distance(a0, a1, b0, b1)
+    angle = wrap_angle(faces.angle[None, :] - faces.angle[:, None])
+    # n_a·(y - x) = n_a·y - d_a for y at either end of face b
+    proj = np.einsum("ak,ebk->eab", faces.normal, np.stack([faces.start, faces.end]))
+    proj = proj - faces.offset[None, :, None]
+    scale = float(max(np.ptp(faces.start, axis=0).max(), faces.length.max()))
+    return ConstraintTables(
+        d_min=d_min,
+        d_max=d_max,
+        angle=angle,
+        c_min=proj.min(axis=0),
+        c_max=proj.max(axis=0),
+        scale=scale,
+    )
+
+
+def pair_feasibility(
+    tables: ConstraintTables, first: Contact, second: Contact, eps_d: float, phi: float
+) -> np.ndarray:
+    """Boolean F x F matrix: may `first` lie on face a and `second` on face b?
+
+    >>> from planner.geometry import make_stable_pose
+    >>> square = make_stable_pose([[0, 0], [2, 0], [2, 2], [0, 2]])
+    >>> t = build_tables(square.faces)
+    >>> ok = pair_feasibility(t, Contact((1, 0), (0, -1)), Contact((2, 1), (1, 0)), 0.0, 0.0)
+    >>> np.argwhere(ok).tolist()  # bottom face then right face, and its rotations
+    [[0, 1], [1, 2], [2, 3], [3, 0]]
+    """
+    slack = LENGTH_SLACK * tables.scale
+    p, q = np.asarray(first.point), np.asarray(second.point)
+    u, v = np.asarray(first.normal), np.asarray(second.normal)
+    r = q - p
+    dist = float(np.hypot(*r))
+    # distance: Dmin - 2 eps_d <= |r| <= Dmax + 2 eps_d
+    ok = (tables.d_min - 2 * eps_d - slack <= dist) & (dist <= tables.d_max + 2 * eps_d + slack)
+    # angle: |wrap(angle(u -> v) - angle(n_a -> n_b))| <= 2 phi
+    measured = np.arctan2(v[1], v[0]) - np.arctan2(u[1], u[0])
+    ok &= np.abs(wrap_angle(measured - tables.angle)) <= 2 * phi + ANGLE_SLACK
+    # direction j -> k: u·r within phi |r| + 2 eps_d of [Cmin(a,b), Cmax(a,b)]
+    widen = phi * dist + 2 * eps_d + slack
+    forward = float(u @ r)
+    ok &= (tables.c_min - widen <= forward) & (forward <= tables.c_max + widen)
+    # direction k -> j: v·(-r) against the tables read from b to a
+    backward = float(v @ -r)
+    ok &= (tables.c_min.T - widen <= backward) & (backward <= tables.c_max.T + widen)
+    return ok
+
+
+def unary_feasibility(pose: StablePose, contact: Contact, normal_z_error: float) -> np.ndarray:
+    """Boolean (F,) mask: faces a single contact may lie on by itself.
+
+    Only the optional out-of-plane normal constrains one contact alone (thesis
+    §6.3): a measured `normal_z` must lie within `normal_z_error` of the face's.
+    """
+    mask = np.ones(len(pose.faces), dtype=bool)
+    if contact.normal_z is not None and pose.normal_z is not None:
+        mask &= np.abs(pose.normal_z - contact.normal_z) <= normal_z_error + ANGLE_SLACK
+    return mask
+
+
+def brute_force_tables(faces: Faces, samples: int = 200) -> ConstraintTables:
+    """Reference tables from dense sampling of face points (for tests)."""
+    s = np.linspace(0.0, 1.0, samples)
+    pts = faces.start[:, None, :] + s[None, :, None] * (faces.end - faces.start)[:, None, :]
+    gaps = pts[None, :, None, :, :] - pts[:, None, :, None, :]  # [a, b, i, j]: y_bj - x_ai
+    dist = np.hypot(gaps[..., 0], gaps[..., 1])
+    proj = np.einsum("ak,abijk->abij", faces.normal, gaps)
+    return ConstraintTables(
+        d_min=dist.min(axis=(2, 3)),
+        d_max=dist.max(axis=(2, 3)),
+        angle=wrap_angle(faces.angle[None, :] - faces.angle[:, None]),
+        c_min=proj.min(axis=(2, 3)),
+        c_max=proj.max(axis=(2, 3)),
+        scale=1.0,
+    )

@@ -1,0 +1,363 @@
+"""Interpretation tree: observations -> posed, weighted hypotheses (DESIGN §4.3-4.7).
+
+Depth = number of contacts; branches = the faces of every stable pose of every
+object, plus an optional "spurious" branch (face -1) for at most `max_outliers`
+contacts. A new contact extends each surviving partial interpretation only:
+constraint checks first (table lookups, :mod:`planner.constraints`), then the
+model check on the fitted pose (:mod:`planner.pose`): every contact on its FINITE
+face within ``eps_d + eps_t/2`` and its normal within ``phi + |dtheta|``; the path
+up to each contact (less ``eps_d``), and every missed path whole, outside the
+posed outline shrunk by ``eps_t/2``; optionally the outline inside the safe circle.
+
+Interpretations whose faces are all parallel leave the translation free along
+the faces: the family's feasible slide interval is sampled at a spacing of about
+``eps_t`` (at most `max_family_samples`); each sample's error bound covers half
+its cell and its weight carries the cell length.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Literal
+
+import numpy as np
+import shapely
+
+from planner.constraints import (
+    ANGLE_SLACK,
+    LENGTH_SLACK,
+    ConstraintTables,
+    build_tables,
+    pair_feasibility,
+    unary_feasibility,
+)
+from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
+from planner.pose import fit_batch, noise_scales, worst_case_bounds
+from planner.types import Contact, ObjectModel, Observation, SensorBounds, StablePose, Workspace
+
+__all__ = ["Candidates", "Group", "RecognitionConfig", "TreeLevel", "evaluate", "extend"]
+
+
+@dataclass(frozen=True)
+class RecognitionConfig:
+    """Knobs of recognition; the defaults follow DESIGN §4."""
+
+    max_outliers: int = 0
+    outlier_probability: float = 0.05
+    bound_mode: Literal["linearized", "thesis"] = "linearized"
+    thesis_fraction: float = 0.10
+    likelihood: Literal["bounded", "gaussian"] = "bounded"
+    max_family_samples: int = 16
+    require_inside_workspace: bool = True
+    normal_z_error: float = 0.1
+
+    def __post_init__(self) -> None:
+        if self.max_outliers < 0:
+            raise ValueError("max_outliers must be >= 0")
+        if self.max_family_samples < 1:
+            raise ValueError("max_family_samples must be >= 1")
+        if self.bound_mode not in ("linearized", "thesis"):
+            raise ValueError("bound_mode must be 'linearized' or 'thesis'")
+        if self.likelihood not in ("bounded", "gaussian"):
+            raise ValueError("likelihood must be 'bounded' or 'gaussian'")
+
+
+@dataclass(frozen=True, eq=False)
+class Group:
+    """One stable pose of one object: a subtree of the interpretation tree."""
+
+    object_index: int
+    model: ObjectModel
+    pose_index: int
+    prior: float
+
+    @property
+    def stable(self) -> StablePose:
+        return self.model.stable_poses[self.pose_index]
+
+    @cached_property
+    def tables(self) -> ConstraintTables:
+        return build_tables(self.stable.faces)
+
+    def shrunk(self, tol: float) -> shapely.Geometry:
+        """The model outline shrunk by `tol` (cached per tolerance bucket), prepared."""
+        cache = self.__dict__.setdefault("_shrunk", {})
+        if tol not in cache:
+            geom = (
+                self.stable.shape.buffer(-tol, join_style="mitre") if tol > 0 else self.stable.shape
+            )
+            shapely.prepare(geom)
+            cache[tol] = geom
+        return cache[tol]
+
+
+def make_groups(models: list[ObjectModel]) -> list[Group]:
+    """One group per stable pose; prior = P(object) x P(stable pose | object)."""
+    weights = np.array([m.prior if m.prior is not None else 1.0 for m in models])
+    weights = weights / weights.sum()
+    groups = []
+    for i, model in enumerate(models):
+        pose_total = sum(p.probability for p in model.stable_poses)
+        for j, pose in enumerate(model.stable_poses):
+            groups.append(Group(i, model, j, float(weights[i] * pose.probability / pose_total)))
+    return groups
+
+
+@dataclass(frozen=True, eq=False)
+class TreeLevel:
+    """Surviving partial interpretations per group: rows (K, depth) of face indices (-1 =
+    spurious), plus the pair-feasibility matrices computed so far, keyed (group, j, k)."""
+
+    rows: tuple[np.ndarray, ...]
+    pair_cache: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict)
+
+
+def extend(
+    level: TreeLevel,
+    groups: list[Group],
+    contacts: list[Contact],
+    bounds: SensorBounds,
+    config: RecognitionConfig,
+) -> TreeLevel:
+    """Extend every surviving row by the newest contact (constraint checks only)."""
+    k = len(contacts) - 1
+    new = contacts[k]
+    cache = dict(level.pair_cache)
+    out = []
+    for g, (group, rows) in enumerate(zip(groups, level.rows, strict=True)):
+        F = len(group.stable.faces)
+        ok = np.broadcast_to(
+            unary_feasibility(group.stable, new, config.normal_z_error), (len(rows), F)
+        ).copy()
+        for j in range(k):
+            key = (g, j, k)
+            if key not in cache:
+                cache[key] = pair_feasibility(
+                    group.tables, contacts[j], new, bounds.position_error, bounds.normal_error
+                )
+            col = rows[:, j]
+            ok &= np.where(col[:, None] >= 0, cache[key][np.maximum(col, 0)], True)
+        parent, face = np.nonzero(ok)
+        grown = [np.column_stack([rows[parent], face])]
+        outliers = (rows < 0).sum(axis=1)
+        spare = np.flatnonzero(outliers < config.max_outliers)
+        if spare.size:
+            grown.append(np.column_stack([rows[spare], np.full(spare.size, -1)]))
+        out.append(np.concatenate(grown).astype(np.int64))
+    return TreeLevel(rows=tuple(out), pair_cache=cache)
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """Posed samples of the surviving interpretations of one group (arrays, length N)."""
+
+    group: int
+    row: np.ndarray  # index into the group's rows
+    theta: np.ndarray
+    t: np.ndarray  # (N, 2)
+    d_translation: np.ndarray  # |dt| bound of the pose translation
+    d_theta: np.ndarray
+    eps_t: np.ndarray
+    cell: np.ndarray  # slide cell length of a family sample (0 when the pose is determined)
+    weight: np.ndarray  # unnormalized posterior weight
+
+
+def _no_candidates(group_index: int) -> Candidates:
+    none = np.zeros(0)
+    return Candidates(
+        group_index, np.zeros(0, np.int64), none, np.zeros((0, 2)), none, none, none, none, none
+    )
+
+
+def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
+    """Round tolerances UP onto a geometric grid (sound: a larger shrink is more lenient)."""
+    tol = np.maximum(tol, floor)
+    return floor * 1.15 ** np.ceil(np.log(tol / floor) / math.log(1.15) - 1e-9)
+
+
+def _free_space_ok(
+    group: Group,
+    theta: np.ndarray,
+    t: np.ndarray,
+    shrink: np.ndarray,
+    origin: np.ndarray,
+    direction: np.ndarray,
+    length: float,
+    floor: float,
+) -> np.ndarray:
+    """Does the segment origin -> origin + length*direction avoid the posed outline
+    shrunk by `shrink` (per sample)? Checked in the model frame, vectorized."""
+    if length <= 0:
+        return np.ones(len(theta), dtype=bool)
+    R = rotation_matrices(theta)
+    a = np.einsum("nji,nj->ni", R, origin - t)
+    b = np.einsum("nji,nj->ni", R, origin + length * direction - t)
+    lines = shapely.linestrings(np.stack([a, b], axis=1))
+    bucket = _tol_bucket(shrink, floor)
+    ok = np.ones(len(theta), dtype=bool)
+    for value in np.unique(bucket):
+        idx = np.flatnonzero(bucket == value)
+        ok[idx] = ~shapely.intersects(lines[idx], group.shrunk(float(value)))
+    return ok
+
+
+def evaluate(
+    group_index: int,
+    group: Group,
+    rows: np.ndarray,
+    observations: list[Observation],
+    bounds: SensorBounds,
+    workspace: Workspace,
+    config: RecognitionConfig,
+    length_scale: float,
+) -> Candidates:
+    """Fit, sample and model-check every row of one group against all observations."""
+    eps_d, phi = bounds.position_error, bounds.normal_error
+    stable = group.stable
+    faces = stable.faces
+    slack = LENGTH_SLACK * length_scale * 10
+    contact_obs = [o for o in observations if o.contact is not None]
+    assigned = rows >= 0
+    keep = np.flatnonzero(assigned.any(axis=1)) if rows.size else np.zeros(0, np.int64)
+    if keep.size == 0 or not contact_obs:
+        return _no_candidates(group_index)
+    rows, assigned = rows[keep], assigned[keep]
+    face = np.maximum(rows, 0)
+    P = np.array([o.contact.point for o in contact_obs])  # type: ignore[union-attr]
+    U = np.array([o.contact.normal for o in contact_obs])  # type: ignore[union-attr]
+    psi = np.arctan2(U[:, 1], U[:, 0])
+
+    # rotation gate: every angle(u_j) - angle(n_a) within 2 phi of their circular mean
+    delta = wrap_angle(psi[None, :] - faces.angle[face])
+    mean = np.arctan2((np.sin(delta) * assigned).sum(1), (np.cos(delta) * assigned).sum(1))
+    gate = np.all(
+        ~assigned | (np.abs(wrap_angle(delta - mean[:, None])) <= 2 * phi + ANGLE_SLACK), 1
+    )
+    rows, assigned, face, keep = rows[gate], assigned[gate], face[gate], keep[gate]
+    if rows.shape[0] == 0:
+        return _no_candidates(group_index)
+
+    sigma_d, sigma_phi = noise_scales(eps_d, phi, length_scale)
+    ref = np.broadcast_to(stable.centroid, (len(rows), 2))
+    fit = fit_batch(P, U, faces.normal[face], faces.offset[face], assigned, ref, sigma_d, sigma_phi)
+    r_c = stable.centroid_radius
+    if config.bound_mode == "thesis":
+        eps_t0 = np.full(len(rows), config.thesis_fraction * 2 * r_c)
+        d_th = eps_t0 / (2 * r_c)
+        d_t = eps_t0 / 2 + np.hypot(*stable.centroid) * d_th
+    else:
+        dq, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
+        # second-order allowance for the linearization: rotations by up to phi
+        d_th = d_th * (1 + phi) + phi**2
+        dq = dq * (1 + phi) + (phi**2) * r_c + phi * eps_d
+        eps_t0 = 2 * (dq + r_c * d_th)
+        d_t = dq + np.hypot(*stable.centroid) * d_th
+
+    # rank-1 families: feasible slide interval (each contact on its finite face), sampled
+    R = rotation_matrices(fit.theta)
+    m0 = np.einsum("kji,ksj->ksi", R, P[None] - fit.t[:, None, :])  # model points at s = 0
+    fdir = faces.direction[face]
+    mu0 = np.einsum("ksi,ksi->ks", m0 - faces.start[face], fdir)
+    rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
+    e = faces.normal[face[np.arange(len(rows)), np.argmax(assigned, 1)]] @ np.array(
+        [[0, 1], [-1, 0]]
+    )
+    rate = np.einsum("ki,ksi->ks", e, fdir) / rho[:, None]  # d mu / d s (= ±1/rho)
+    margin = eps_d + eps_t0[:, None] / 2 + slack
+    lo_mu, hi_mu = -margin, faces.length[face] + margin
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_a, s_b = (lo_mu - mu0) / rate, (hi_mu - mu0) / rate
+    s_lo = np.where(assigned, np.minimum(s_a, s_b), -np.inf).max(1)
+    s_hi = np.where(assigned, np.maximum(s_a, s_b), np.inf).min(1)
+    family = ~fit.rank2
+    alive = fit.rank2 | (s_hi >= s_lo)
+    span = np.where(family & alive, s_hi - s_lo, 0.0)
+    # the family's weight carries its nominal span (no margin); the margin only places samples
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n_a, n_b = (0.0 - mu0) / rate, (faces.length[face] - mu0) / rate
+    nominal = np.where(assigned, np.maximum(n_a, n_b), np.inf).min(1) - np.where(
+        assigned, np.minimum(n_a, n_b), -np.inf
+    ).max(1)
+    nominal = np.clip(nominal, np.minimum(span, eps_t0), span)
+    span_scale = np.where(span > 0, nominal / np.where(span > 0, span, 1.0), 1.0)
+    n = np.where(
+        family,
+        np.clip(
+            np.ceil(span / np.maximum(eps_t0, 1e-12 * length_scale)), 1, config.max_family_samples
+        ),
+        1,
+    ).astype(np.int64)
+    n = np.where(alive, n, 0)
+    cell = np.where(family, span / np.maximum(n, 1), 0.0)
+
+    src = np.repeat(np.arange(len(rows)), n)
+    offset = np.arange(len(src)) - np.repeat(np.cumsum(n) - n, n)
+    s_val = np.where(family[src], s_lo[src] + (offset + 0.5) * cell[src], 0.0)
+    theta = fit.theta[src]
+    t = fit.t[src] + s_val[:, None] * fit.slide[src]
+    eps_t = eps_t0[src] + cell[src]
+    d_translation = d_t[src] + cell[src] / 2
+    d_theta = d_th[src]
+    ok = np.ones(len(src), dtype=bool)
+
+    # model check: each contact on its finite posed face, normal within phi + dtheta
+    Rs = rotation_matrices(theta)
+    f_src = face[src]
+    start = np.einsum("nij,nsj->nsi", Rs, faces.start[f_src]) + t[:, None, :]
+    end = np.einsum("nij,nsj->nsi", Rs, faces.end[f_src]) + t[:, None, :]
+    dist = point_segment_distance(P[None], start, end)
+    a_src = assigned[src]
+    ok &= np.all(~a_src | (dist <= eps_d + eps_t[:, None] / 2 + slack), axis=1)
+    ang = np.abs(wrap_angle(psi[None, :] - theta[:, None] - faces.angle[f_src]))
+    ok &= np.all(~a_src | (ang <= phi + d_theta[:, None] + ANGLE_SLACK), axis=1)
+
+    # optional: the posed outline inside the safe circle
+    if config.require_inside_workspace:
+        verts = np.einsum("nij,vj->nvi", Rs, stable.outline) + t[:, None, :]
+        reach = np.hypot(*(verts - np.asarray(workspace.center)).transpose(2, 0, 1)).max(1)
+        ok &= reach <= workspace.radius + eps_t / 2 + slack
+
+    # free space: path up to each contact (less eps_d), and each missed path whole
+    floor = max(slack, 1e-9)
+    shrink = eps_t / 2 + slack
+    contact_col = 0
+    for obs in observations:
+        o, d = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
+        if obs.contact is None:
+            reach_len = obs.path.length
+            check = ok.copy()
+        else:
+            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - eps_d - slack
+            check = ok & a_src[:, contact_col]
+            contact_col += 1
+        idx = np.flatnonzero(check)
+        if idx.size:
+            ok[idx] &= _free_space_ok(
+                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor
+            )
+
+    # weight = prior x incidence likelihood x pose volume (x Gaussian residual term)
+    world_n = np.einsum("nij,nsj->nsi", Rs, faces.normal[f_src])
+    dirs = np.array([o.path.direction for o in contact_obs])
+    incidence = np.where(a_src, np.abs(np.einsum("nsi,si->ns", world_n, dirs)), 1.0).prod(1)
+    volume = np.sqrt(np.maximum(np.linalg.det(fit.cov), 0.0))[src]
+    volume = np.where(family[src], volume * cell[src] * span_scale[src] / sigma_d, volume)
+    weight = group.prior * incidence * volume
+    weight *= config.outlier_probability ** (~a_src).sum(axis=1)
+    if config.likelihood == "gaussian":
+        weight *= np.exp(-0.5 * fit.chi2[src])
+
+    sel = np.flatnonzero(ok & (weight > 0))
+    return Candidates(
+        group=group_index,
+        row=keep[src[sel]],
+        theta=theta[sel],
+        t=t[sel],
+        d_translation=d_translation[sel],
+        d_theta=d_theta[sel],
+        eps_t=eps_t[sel],
+        cell=cell[src[sel]],
+        weight=weight[sel],
+    )

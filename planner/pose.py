@@ -1,0 +1,300 @@
+"""Pose fit, Kalman refinement and error bounds (DESIGN §4.4).
+
+The fit works in a lifted linear form. With ``m = R(theta)^T p + b`` the model
+point of world point p (so ``b = -R^T t``), and the state ``z = (c, s, bx, by)``
+standing for ``(cos theta, sin theta, b)``, every contact j on face a gives three
+equations that are LINEAR in z:
+
+- point on the face's line:  ``n_a·(R^T p_j + b) = d_a``
+- normal, tangential part:   ``t_a·(R^T u_j) = 0``   (t_a = n_a turned +90 degrees)
+- normal, radial part:       ``n_a·(R^T u_j) = 1``
+
+so the weighted least-squares fit over all contacts (batch) and one Kalman update
+per contact (incremental, :class:`PoseFilter`) agree to rounding. theta is
+``atan2(s, c)`` (for one contact and equal weights, the circular mean of
+``angle(u_j) - angle(n_a)``), and ``t = -R b / |(c, s)|``.
+
+Error bounds (`linearized` mode): the first-order sensitivity of the fit to each
+contact's position (a disk of radius eps_d) and normal angle (within ±phi),
+summed in absolute value (worst case), gives |dt|, |dtheta| and the error-disk
+diameter ``eps_t = 2 (|dq| + r |dtheta|)`` for a reference point q at the
+outline's centroid and r the centroid's farthest vertex. A second-order
+allowance covers the linearization.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+from filterpy.kalman import ExtendedKalmanFilter
+
+from planner.geometry import rotation_matrices
+
+__all__ = ["FitBatch", "PoseFilter", "fit_batch", "lifted_rows", "noise_scales"]
+
+_J = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90 degree turn
+
+
+def noise_scales(eps_d: float, phi: float, length_scale: float) -> tuple[float, float]:
+    """Standard scales (sigma_d, sigma_phi) weighting the rows; zero bounds get floors
+    that keep the rows well conditioned (exact data fit exactly whatever the weights)."""
+    if phi > 0 and eps_d > 0:
+        return eps_d, phi
+    if phi > 0:
+        return 1e-3 * phi * length_scale, phi
+    if eps_d > 0:
+        return eps_d, 1e-3 * eps_d / length_scale
+    return length_scale, 1.0
+
+
+def lifted_rows(
+    points: np.ndarray, normals: np.ndarray, face_normals: np.ndarray, face_offsets: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Rows H (..., 3, 4) and targets y (..., 3) of the lifted contact equations.
+
+    `points`, `normals` (measured, world) and `face_normals` (model) are (..., 2),
+    `face_offsets` (...): broadcast over interpretations and contacts.
+    """
+    px, py = points[..., 0], points[..., 1]
+    ux, uy = normals[..., 0], normals[..., 1]
+    nx, ny = np.broadcast_arrays(face_normals[..., 0], face_normals[..., 1])
+    px, py, ux, uy = (np.broadcast_to(a, nx.shape) for a in (px, py, ux, uy))
+    zero = np.zeros_like(nx)
+    # n_a·(R^T p + b) = c (n·p) + s (nx py - ny px) + n·b
+    line = np.stack([nx * px + ny * py, nx * py - ny * px, nx, ny], -1)
+    # R^T u = (c ux + s uy, c uy - s ux)
+    ru1 = np.stack([ux, uy, zero, zero], -1)
+    ru2 = np.stack([uy, -ux, zero, zero], -1)
+    tangential = -ny[..., None] * ru1 + nx[..., None] * ru2
+    radial = nx[..., None] * ru1 + ny[..., None] * ru2
+    H = np.stack([line, tangential, radial], -2)
+    y = np.stack(np.broadcast_arrays(face_offsets, zero, zero + 1.0), -1)
+    return H, y
+
+
+def _row_derivatives(z: np.ndarray, normals: np.ndarray, face_normals: np.ndarray) -> np.ndarray:
+    """E (..., 3 rows, 3 measurements): d(H z)/d(px, py, psi) for each contact."""
+    c, s = z[..., 0], z[..., 1]
+    nx, ny = face_normals[..., 0], face_normals[..., 1]
+    ux, uy = normals[..., 0], normals[..., 1]
+    zero = np.zeros(np.broadcast_shapes(nx.shape, c.shape))
+    # line row: d/dp [c (n·p) + s (nx py - ny px)]
+    line = np.stack([c * nx - s * ny, c * ny + s * nx, zero], -1)
+    # normal rows: du/dpsi = (-uy, ux)
+    d1 = -c * uy + s * ux
+    d2 = c * ux + s * uy
+    tangential = np.stack([zero, zero, -ny * d1 + nx * d2], -1)
+    radial = np.stack([zero, zero, nx * d1 + ny * d2], -1)
+    return np.stack([line, tangential, radial], -2)
+
+
+@dataclass(frozen=True, eq=False)
+class FitBatch:
+    """Fits of K interpretations. Arrays have leading axis K.
+
+    `theta`, `t` (K, 2): the pose; `rank2`: translation fully determined (else a
+    one-parameter family sliding along `slide` (K, 2, world, per unit of the model
+    slide coordinate)); `sens` (K, s, 3, 3): d(qx, qy, theta)/d(px, py, psi) per
+    contact with q the world position of `reference` (model point);
+    `sens_origin` (K, s, 2, 3): the same for the pose translation;
+    `cov` (K, 3, 3) covariance of (x, y, theta) at the row weights (rank-1 fits pinned
+    along the slide at sigma_d; its determinant does not depend on the model origin);
+    `chi2` (K,) weighted residual; `z` (K, 4) lifted state.
+    """
+
+    theta: np.ndarray
+    t: np.ndarray
+    rank2: np.ndarray
+    slide: np.ndarray
+    sens: np.ndarray
+    sens_origin: np.ndarray
+    cov: np.ndarray
+    chi2: np.ndarray
+    z: np.ndarray
+
+
+def fit_batch(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    reference: np.ndarray,
+    sigma_d: float,
+    sigma_phi: float,
+) -> FitBatch:
+    """Weighted least-squares pose of K interpretations over s contacts at once.
+
+    `points`, `normals`: (s, 2) measured contacts (world); `face_normals` (K, s, 2)
+    and `face_offsets` (K, s): the model faces assigned to them; `assigned` (K, s)
+    bool (False = spurious contact, ignored); `reference` (K, 2) model point whose
+    world position the bounds are expressed at. Every row needs one assigned contact.
+
+    Rank-1 interpretations (all assigned faces parallel) are pinned at slide
+    coordinate 0 along the face direction ``e`` in the model frame (``e·b = 0``);
+    the caller moves them along `slide`.
+    """
+    K = assigned.shape[0]
+    H, y = lifted_rows(points[None], normals[None], face_normals, face_offsets)  # (K,s,3,4)
+    w_row = np.array([1 / sigma_d**2, 1 / sigma_phi**2, 1 / sigma_phi**2])
+    W = assigned[..., None] * w_row  # (K, s, 3)
+    info = np.einsum("ksri,ksr,ksrj->kij", H, W, H)
+    vec = np.einsum("ksri,ksr,ksr->ki", H, W, y)
+
+    # rank of the translation: do the assigned faces hold two non-parallel normals?
+    first = np.argmax(assigned, axis=1)
+    n_ref = face_normals[np.arange(K), first]  # (K, 2)
+    cross = np.abs(
+        n_ref[:, None, 0] * face_normals[..., 1] - n_ref[:, None, 1] * face_normals[..., 0]
+    )
+    rank2 = np.any(assigned & (cross > 1e-6), axis=1)
+    # rank 1: pin e·b = 0 with e the face direction (model frame)
+    e = n_ref @ _J.T
+    pin = np.concatenate([np.zeros((K, 2)), e], axis=1)
+    info = info + (~rank2)[:, None, None] * np.einsum("ki,kj->kij", pin, pin) / sigma_d**2
+
+    info_inv = np.linalg.inv(info)
+    z = np.einsum("kij,kj->ki", info_inv, vec)
+    c, s = z[:, 0], z[:, 1]
+    rho2 = c * c + s * s
+    rho = np.sqrt(rho2)
+    theta = np.arctan2(s, c)
+    R = rotation_matrices(theta)  # (K, 2, 2)
+    b = z[:, 2:]
+    Rb = np.einsum("kij,kj->ki", R, b)
+    t = -Rb / rho[:, None]
+    slide = -np.einsum("kij,kj->ki", R, e) / rho[:, None]
+
+    # G = d(x, y, theta)/d(c, s, bx, by)
+    G = np.zeros((K, 3, 4))
+    G[:, 2, 0], G[:, 2, 1] = -s / rho2, c / rho2
+    RJb = np.einsum("kij,jl,kl->ki", R, _J, b)
+    for col, (dth, drho) in enumerate([(-s / rho2, c / rho), (c / rho2, s / rho)]):
+        G[:, :2, col] = -RJb / rho[:, None] * dth[:, None] + Rb / rho2[:, None] * drho[:, None]
+    G[:, :2, 2:] = -R / rho[:, None, None]
+
+    # first order: dz = -info^-1 H^T W E dm  (residual terms are second order)
+    E = _row_derivatives(z[:, None, :], normals[None], face_normals)  # (K, s, 3, 3)
+    dz = -np.einsum("kij,ksrj,ksr,ksrm->ksim", info_inv, H, W, E)
+    sens_origin = np.einsum("kij,ksjm->ksim", G, dz)  # (K, s, 3, 3)
+    # q = R ref + t: dq = dt + R J ref dtheta
+    arm = np.einsum("kij,jl,kl->ki", R, _J, reference)
+    sens = sens_origin.copy()
+    sens[:, :, :2, :] += arm[:, None, :, None] * sens_origin[:, :, None, 2, :]
+
+    # pose-space information of the point-on-line and normal residuals:
+    # line r = n_w·(p - t) - d:  dr/dt = -n_w,  dr/dtheta = (J n_w)·(p - t);  angle: dr/dtheta = -1
+    n_w = np.einsum("kij,ksj->ksi", R, face_normals)
+    lever = np.einsum("ksi,ksi->ks", n_w @ _J.T, points[None] - t[:, None, :])
+    g = np.concatenate([-n_w, lever[..., None]], axis=-1)  # (K, s, 3)
+    info_pose = np.einsum("ksi,ks,ksj->kij", g, assigned / sigma_d**2, g)
+    info_pose[:, 2, 2] += assigned.sum(axis=1) / sigma_phi**2
+    tau = slide / np.linalg.norm(slide, axis=1, keepdims=True)
+    pin_pose = np.concatenate([tau, np.zeros((K, 1))], axis=1)
+    info_pose += (~rank2)[:, None, None] * np.einsum("ki,kj->kij", pin_pose, pin_pose) / sigma_d**2
+    cov = np.linalg.inv(info_pose)
+    resid = y - np.einsum("ksri,ki->ksr", H, z)
+    chi2 = np.einsum("ksr,ksr->k", W, resid**2)
+    return FitBatch(
+        theta=theta,
+        t=t,
+        rank2=rank2,
+        slide=slide,
+        sens=sens,
+        sens_origin=sens_origin[:, :, :2, :],
+        cov=cov,
+        chi2=chi2,
+        z=z,
+    )
+
+
+def worst_case_bounds(
+    sens: np.ndarray, assigned: np.ndarray, eps_d: float, phi: float
+) -> tuple[np.ndarray, np.ndarray]:
+    """Worst-case |dq| and |dtheta| (K,) from the sensitivities (first order).
+
+    Each contact's position error lies in a disk of radius eps_d (operator norm of
+    the 2x2 block) and its normal angle error within ±phi; the worst case adds
+    every contribution in absolute value.
+    """
+    pos_block = sens[..., :2, :2]
+    pos_norm = np.linalg.norm(pos_block, ord=2, axis=(-2, -1))
+    dq = eps_d * pos_norm + phi * np.hypot(sens[..., 0, 2], sens[..., 1, 2])
+    dth = eps_d * np.hypot(sens[..., 2, 0], sens[..., 2, 1]) + phi * np.abs(sens[..., 2, 2])
+    return (dq * assigned).sum(axis=1), (dth * assigned).sum(axis=1)
+
+
+class PoseFilter:
+    """Incremental pose fit: one Kalman update per contact (filterpy).
+
+    The lifted measurement model is linear, so the extended Kalman filter's
+    linearization is exact and its estimate equals :func:`fit_batch` over the
+    same contacts. The filter starts from the batch fit of the first contacts
+    that determine the pose (two with non-parallel faces), with the information
+    of those contacts as its covariance.
+
+    >>> import math
+    >>> f = PoseFilter(sigma_d=1.0, sigma_phi=0.05)
+    >>> f.update((1, 0), (1, 0), (1, 0), 1.0)    # on face x = 1 of a unit square
+    >>> f.update((0, 1), (0, 1), (0, 1), 1.0)    # on face y = 1
+    >>> [round(v, 9) + 0.0 for v in f.pose]
+    [0.0, 0.0, 0.0]
+    """
+
+    def __init__(self, sigma_d: float, sigma_phi: float) -> None:
+        self._weights = np.array([1 / sigma_d**2, 1 / sigma_phi**2, 1 / sigma_phi**2])
+        self._pending: list[tuple[np.ndarray, np.ndarray]] = []
+        self._ekf: ExtendedKalmanFilter | None = None
+
+    def update(
+        self,
+        point: tuple[float, float],
+        normal: tuple[float, float],
+        face_normal: tuple[float, float],
+        face_offset: float,
+    ) -> None:
+        """Fold in one contact (world point, measured unit normal) on a model face."""
+        H, y = lifted_rows(
+            np.asarray(point, float),
+            np.asarray(normal, float),
+            np.asarray(face_normal, float),
+            np.asarray(face_offset, float),
+        )
+        if self._ekf is None:
+            self._pending.append((H, y))
+            Hs = np.concatenate([h for h, _ in self._pending])
+            ys = np.concatenate([v for _, v in self._pending])
+            Ws = np.tile(self._weights, len(self._pending))
+            info = Hs.T @ (Ws[:, None] * Hs)
+            if np.linalg.matrix_rank(info, tol=1e-9 * np.abs(info).max()) < 4:
+                return
+            ekf = ExtendedKalmanFilter(dim_x=4, dim_z=3)
+            ekf.P = np.linalg.inv(info)
+            ekf.x = ekf.P @ (Hs.T @ (Ws * ys))
+            self._ekf = ekf
+            return
+        self._ekf.update(
+            y, HJacobian=lambda _x, H=H: H, Hx=lambda x, H=H: H @ x, R=np.diag(1 / self._weights)
+        )
+
+    @property
+    def ready(self) -> bool:
+        return self._ekf is not None
+
+    @property
+    def state(self) -> np.ndarray:
+        """Lifted state (c, s, bx, by)."""
+        if self._ekf is None:
+            raise ValueError("the pose is not determined yet (needs two non-parallel faces)")
+        return np.asarray(self._ekf.x, dtype=float).reshape(4)
+
+    @property
+    def pose(self) -> tuple[float, float, float]:
+        """(x, y, theta) of the current estimate."""
+        c, s, bx, by = self.state
+        rho = float(np.hypot(c, s))
+        theta = float(np.arctan2(s, c))
+        R = rotation_matrices(np.asarray(theta))
+        t = -(R @ np.array([bx, by])) / rho
+        return float(t[0]), float(t[1]), theta

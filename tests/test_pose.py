@@ -1,0 +1,91 @@
+"""Pose fit (DESIGN §4.4): exact recovery, bounds that hold, batch = Kalman."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hardware_sim.world import random_world
+from planner.pose import PoseFilter, fit_batch, noise_scales
+from planner.types import SensorBounds
+from tests.conftest import SET_NAMES, WORKSPACE, object_set
+
+
+def _touches(world, bounds, rng, count):
+    """`count` contacts with their true faces, until two non-parallel faces are among them."""
+    obs, faces = [], []
+    while len(obs) < count or not _rank2(world, faces):
+        o, f = world.execute(world.hitting_path(rng), bounds, rng, edge_share=0.5)
+        obs.append(o)
+        faces.append(f)
+    return obs, faces
+
+
+def _rank2(world, faces) -> bool:
+    n = world.stable.faces.normal[faces]
+    return (
+        len(faces) > 1
+        and np.abs(n[:, None, 0] * n[None, :, 1] - n[:, None, 1] * n[None, :, 0]).max() > 1e-6
+    )
+
+
+def _fit(world, obs, faces, bounds):
+    stable = world.stable
+    P = np.array([o.contact.point for o in obs])
+    U = np.array([o.contact.normal for o in obs])
+    fn = stable.faces.normal[faces][None]
+    fo = stable.faces.offset[faces][None]
+    sd, sp = noise_scales(bounds.position_error, bounds.normal_error, stable.centroid_radius)
+    return fit_batch(P, U, fn, fo, np.ones((1, len(obs)), bool), stable.centroid[None], sd, sp)
+
+
+@pytest.mark.parametrize("name", SET_NAMES)
+@settings(max_examples=40, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(2, 5))
+def test_exact_contacts_recover_the_pose(name, seed, count):
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    obs, faces = _touches(world, SensorBounds(), rng, count)
+    fit = _fit(world, obs, faces, SensorBounds())
+    assert fit.rank2[0]
+    scale = max(1.0, math.hypot(world.pose.x, world.pose.y))
+    assert abs(fit.t[0, 0] - world.pose.x) <= 1e-9 * scale
+    assert abs(fit.t[0, 1] - world.pose.y) <= 1e-9 * scale
+    assert abs(math.remainder(fit.theta[0] - world.pose.theta, 2 * math.pi)) <= 1e-9
+
+
+@pytest.mark.parametrize("name", SET_NAMES)
+@settings(max_examples=40, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(2, 6))
+def test_batch_fit_and_kalman_updates_agree(name, seed, count):
+    bounds = SensorBounds(1.0, math.radians(3))
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    obs, faces = _touches(world, bounds, rng, count)
+    fit = _fit(world, obs, faces, bounds)
+    sd, sp = noise_scales(bounds.position_error, bounds.normal_error, world.stable.centroid_radius)
+    kf = PoseFilter(sd, sp)
+    for o, f in zip(obs, faces, strict=True):
+        kf.update(
+            o.contact.point,
+            o.contact.normal,
+            world.stable.faces.normal[f],
+            world.stable.faces.offset[f],
+        )
+    assert kf.ready
+    x, y, theta = kf.pose
+    assert np.allclose(kf.state, fit.z[0], rtol=0, atol=1e-6 * np.abs(fit.z[0]).max())
+    assert abs(x - fit.t[0, 0]) <= 1e-6 and abs(y - fit.t[0, 1]) <= 1e-6
+    assert abs(math.remainder(theta - fit.theta[0], 2 * math.pi)) <= 1e-6
+
+
+def test_filter_reports_undetermined_pose_until_two_faces():
+    kf = PoseFilter(1.0, 0.05)
+    kf.update((1, 0), (1, 0), (1, 0), 1.0)
+    assert not kf.ready
+    with pytest.raises(ValueError, match="not determined"):
+        _ = kf.pose
