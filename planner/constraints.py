@@ -114,20 +114,3 @@ def unary_feasibility(pose: StablePose, contact: Contact, normal_z_error: float)
     if contact.normal_z is not None and pose.normal_z is not None:
         mask &= np.abs(pose.normal_z - contact.normal_z) <= normal_z_error + ANGLE_SLACK
     return mask
-
-
-def brute_force_tables(faces: Faces, samples: int = 200) -> ConstraintTables:
-    """Reference tables from dense sampling of face points (for tests)."""
-    s = np.linspace(0.0, 1.0, samples)
-    pts = faces.start[:, None, :] + s[None, :, None] * (faces.end - faces.start)[:, None, :]
-    gaps = pts[None, :, None, :, :] - pts[:, None, :, None, :]  # [a, b, i, j]: y_bj - x_ai
-    dist = np.hypot(gaps[..., 0], gaps[..., 1])
-    proj = np.einsum("ak,abijk->abij", faces.normal, gaps)
-    return ConstraintTables(
-        d_min=dist.min(axis=(2, 3)),
-        d_max=dist.max(axis=(2, 3)),
-        angle=wrap_angle(faces.angle[None, :] - faces.angle[:, None]),
-        c_min=proj.min(axis=(2, 3)),
-        c_max=proj.max(axis=(2, 3)),
-        scale=1.0,
-    )

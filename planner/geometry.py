@@ -34,7 +34,7 @@ __all__ = [
 EDGE_TOLERANCE = 1e-6
 
 
-def wrap_angle(angle: np.ndarray | float) -> np.ndarray | float:
+def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
     """Wrap angles (radians) into [-pi, pi)."""
     return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
 

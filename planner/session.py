@@ -125,6 +125,7 @@ class Session:
     # -- derived state ------------------------------------------------------------
     @cached_property
     def _derived(self) -> _Derived:
+        parent_level: TreeLevel | None
         if self._parent is not None:
             parent_level = self._parent._derived.level
         else:
