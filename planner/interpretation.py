@@ -19,7 +19,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, field
-from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -34,6 +33,7 @@ from planner.constraints import (
     unary_feasibility,
 )
 from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
+from planner.memo import cached_property
 from planner.pose import fit_batch, noise_scales, worst_case_bounds
 from planner.types import Contact, ObjectModel, Observation, SensorBounds, StablePose, Workspace
 

@@ -22,12 +22,13 @@ from __future__ import annotations
 import math
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from functools import cached_property, partial, reduce
+from functools import partial, reduce
 
 import numpy as np
 import shapely
 
 from planner.errors import InvalidModelError, PlanningNotPossibleError
+from planner.memo import cached_property
 from planner.types import Hypothesis, ObjectModel
 
 __all__ = [

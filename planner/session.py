@@ -22,7 +22,6 @@ from __future__ import annotations
 
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
-from functools import cached_property
 from typing import Literal
 
 import numpy as np
@@ -42,6 +41,7 @@ from planner.interpretation import (
     extend,
     make_groups,
 )
+from planner.memo import cached_property
 from planner.types import (
     ErrorBound,
     Hypothesis,

@@ -11,12 +11,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
-from functools import cached_property
 
 import numpy as np
 
 from planner import geometry
 from planner.errors import InvalidObservationError
+from planner.memo import cached_property
 
 __all__ = [
     "Contact",

@@ -1,0 +1,377 @@
+"""Candidate sensing paths (DESIGN §4.10).
+
+Every path is straight, starts on the safe circle and is given in the world
+frame: origin (length unit), unit direction, length, and the aim point it was
+built for. The general set aims at points inside the intersection area (IA)
+from origins spread around the circle, and at points just inside faces where
+the hypotheses' boundaries differ (low blocking strength), approaching them head
+on and at two oblique angles. Extra paths (thesis windows, strategy probes) are
+passed in and always kept. Duplicates (same direction and line offset within a
+resolution) are dropped, keeping the first in priority order: extra, IA, boundary.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.errors import PlannerError
+from planner.posed import contains_points
+from planner.types import SensingPath, SensorBounds, Workspace
+
+if TYPE_CHECKING:
+    from planner.posed import PosedSet
+
+__all__ = [
+    "CandidateConfig",
+    "Candidates",
+    "candidate_cap",
+    "generate_candidates",
+    "intersection_aims",
+    "paths_through",
+    "union_centre",
+]
+
+
+@dataclass(frozen=True)
+class CandidateConfig:
+    """Size and resolution of the general candidate set.
+
+    `count` caps the general candidates (extra paths come on top) for up to
+    `full_size_hypotheses` hypotheses; beyond, the cap shrinks as the square of
+    their ratio (not below `min_count`), since the outcome and confusability
+    passes cost candidates x hypotheses^2;
+    `origins` is the number of origins spread on the safe circle for each IA aim;
+    `intersection_aims`, `boundary_aims` the number of aim points of each kind;
+    `oblique` (radians) the extra approach angles of boundary aims (0 and +-oblique);
+    `angle_step` (radians) and `offset_step` (length; None = radius / 200) the
+    dedupe resolution; `grid` the sample grid (per side) used to find IA points;
+    `face_samples` the points per face examined for differing boundaries.
+    """
+
+    count: int = 256
+    full_size_hypotheses: int = 64
+    min_count: int = 48
+    origins: int = 24
+    intersection_aims: int = 6
+    boundary_aims: int = 48
+    oblique: float = 0.5
+    angle_step: float = math.radians(1.0)
+    offset_step: float | None = None
+    grid: int = 24
+    face_samples: int = 3
+
+    def __post_init__(self) -> None:
+        names = ("count", "min_count", "origins", "intersection_aims", "boundary_aims")
+        for name in (*names, "face_samples", "full_size_hypotheses"):
+            if getattr(self, name) < 0:
+                raise PlannerError("must be >= 0", field=f"candidates.{name}")
+        if self.grid < 2:
+            raise PlannerError("must be >= 2", field="candidates.grid")
+        if not (0 <= self.oblique < math.pi / 2):
+            raise PlannerError("must lie in [0, pi/2)", field="candidates.oblique")
+        if not self.angle_step > 0 or (self.offset_step is not None and not self.offset_step > 0):
+            raise PlannerError("dedupe steps must be > 0", field="candidates.angle_step")
+
+
+@dataclass(frozen=True, eq=False)
+class Candidates:
+    """C paths: `origins`, unit `directions`, `aims` (C, 2), `lengths` (C,), and
+    `source` (C,) naming where each came from (extra, intersection, boundary, ...)."""
+
+    origins: np.ndarray
+    directions: np.ndarray
+    lengths: np.ndarray
+    aims: np.ndarray
+    source: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.lengths)
+
+    def path(self, i: int) -> SensingPath:
+        return SensingPath(
+            tuple(self.origins[i]), tuple(self.directions[i]), float(self.lengths[i])
+        )
+
+    def subset(self, index: np.ndarray | Sequence[int]) -> Candidates:
+        idx = np.asarray(index, dtype=int)
+        return Candidates(
+            self.origins[idx],
+            self.directions[idx],
+            self.lengths[idx],
+            self.aims[idx],
+            self.source[idx],
+        )
+
+    @classmethod
+    def empty(cls) -> Candidates:
+        return cls(
+            np.zeros((0, 2)),
+            np.zeros((0, 2)),
+            np.zeros(0),
+            np.zeros((0, 2)),
+            np.zeros(0, dtype="<U12"),
+        )
+
+    @classmethod
+    def concat(cls, parts: Sequence[Candidates]) -> Candidates:
+        parts = [p for p in parts if len(p)] or [cls.empty()]
+        return cls(
+            *(
+                np.concatenate([getattr(p, k) for p in parts])
+                for k in ("origins", "directions", "lengths", "aims", "source")
+            )
+        )
+
+    @classmethod
+    def from_paths(
+        cls,
+        paths: Sequence[SensingPath],
+        source: str = "extra",
+        aims: np.ndarray | None = None,
+    ) -> Candidates:
+        """Wrap given paths; the aim defaults to the path's end point."""
+        if not paths:
+            return cls.empty()
+        origins = np.array([p.origin for p in paths], dtype=float)
+        directions = np.array([p.direction for p in paths], dtype=float)
+        lengths = np.array([p.length for p in paths], dtype=float)
+        end = origins + directions * lengths[:, None]
+        return cls(
+            origins,
+            directions,
+            lengths,
+            end if aims is None else np.asarray(aims, float),
+            np.full(len(paths), source, dtype="<U12"),
+        )
+
+
+def paths_through(
+    aims: np.ndarray, directions: np.ndarray, workspace: Workspace
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Trace each aim point back along -direction to the safe circle.
+
+    Returns (origins (N, 2), distance from origin to aim (N,), chord length from
+    the origin to where the line leaves the circle (N,)); NaN where the line
+    misses the circle or the aim lies outside it.
+    """
+    c = np.asarray(workspace.center, dtype=float)
+    rel = np.asarray(aims, dtype=float) - c
+    d = np.asarray(directions, dtype=float)
+    # |rel - s d| = R  ->  s = d.rel + sqrt((d.rel)^2 - |rel|^2 + R^2)
+    b = np.einsum("nk,nk->n", d, rel)
+    disc = b * b - np.einsum("nk,nk->n", rel, rel) + workspace.radius**2
+    root = np.sqrt(np.where(disc >= 0, disc, np.nan))
+    back = b + root
+    back = np.where(back >= 0, back, np.nan)
+    origins = np.asarray(aims, dtype=float) - back[:, None] * d
+    return origins, back, 2 * root
+
+
+def _ring_points(workspace: Workspace, count: int, start_angle: float) -> np.ndarray:
+    angles = start_angle + 2 * np.pi * np.arange(count) / max(count, 1)
+    return np.asarray(workspace.center) + workspace.radius * np.stack(
+        [np.cos(angles), np.sin(angles)], axis=1
+    )
+
+
+def _polygons(posed: PosedSet) -> list:
+    import shapely
+
+    return [shapely.Polygon(outline, list(holes)).buffer(0) for outline, holes in posed.rings]
+
+
+def union_centre(posed: PosedSet) -> np.ndarray:
+    """Area centroid of the union of the posed outlines (world frame)."""
+    import shapely
+
+    union = shapely.union_all(_polygons(posed))
+    if union.is_empty:
+        return np.asarray(posed.start[posed.valid].mean(axis=0))
+    return np.array(union.centroid.coords[0])
+
+
+def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
+    """Up to `count` spread points inside the intersection area (IA).
+
+    The first is the IA centroid when it lies inside, else the IA's
+    representative point. When the IA is empty, points inside the largest
+    weight of posed outlines stand in for it.
+    """
+    import shapely
+
+    if count == 0:
+        return np.zeros((0, 2))
+    aims: list[np.ndarray] = []
+    ia = shapely.intersection_all(_polygons(posed))
+    if not ia.is_empty and ia.area > 0:
+        centroid = ia.centroid
+        first = centroid if ia.contains(centroid) else ia.representative_point()
+        aims.append(np.array(first.coords[0]))
+    pts = posed.start[posed.valid]
+    lo, hi = pts.min(axis=0), pts.max(axis=0)
+    axes = [np.linspace(lo[i], hi[i], grid + 2)[1:-1] for i in range(2)]
+    samples = np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 2)
+    depth = contains_points(posed, samples).astype(float) @ posed.weight
+    if depth.max(initial=0.0) > 0:
+        inside = samples[depth >= depth.max() - 1e-9]
+        chosen = list(aims) or [inside[0]]
+        # farthest-point sampling spreads the remaining aims over the area
+        gap = np.min([np.hypot(*(inside - a).T) for a in chosen], axis=0)
+        while len(chosen) < count and gap.max(initial=0.0) > 0:
+            nxt = inside[int(np.argmax(gap))]
+            chosen.append(nxt)
+            gap = np.minimum(gap, np.hypot(*(inside - nxt).T))
+        aims = chosen
+    return np.array(aims[:count]).reshape(-1, 2)
+
+
+def _boundary_aims(
+    posed: PosedSet, sensor: SensorBounds, config: CandidateConfig, rng: np.random.Generator
+) -> tuple[np.ndarray, np.ndarray]:
+    """Points on posed faces where the classes' boundaries differ, weakest blocking first.
+
+    Returns (points (N, 2), outward normals (N, 2)).
+    """
+    from planner.geometry import point_segment_distance, wrap_angle
+
+    if config.boundary_aims == 0 or config.face_samples == 0:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    frac = (np.arange(config.face_samples) + 0.5) / config.face_samples
+    pts = posed.start[..., None, :] + frac[:, None] * (posed.end - posed.start)[..., None, :]
+    owner = np.broadcast_to(np.arange(len(posed))[:, None, None], pts.shape[:-1])
+    keep = np.broadcast_to(posed.valid[..., None], pts.shape[:-1])
+    normals = np.broadcast_to(posed.normal[..., None, :], pts.shape)
+    pts, owner, normals = pts[keep], owner[keep], normals[keep]
+    limit = 8 * config.boundary_aims
+    if len(pts) > limit:
+        pick = np.sort(rng.choice(len(pts), size=limit, replace=False))
+        pts, owner, normals = pts[pick], owner[pick], normals[pick]
+    member = np.zeros((len(posed), posed.n_classes))
+    member[np.arange(len(posed)), posed.cls] = 1.0
+    strength = np.empty(len(pts))
+    chunk = max(1, 1_000_000 // max(1, posed.valid.size))
+    angle_faces = np.arctan2(posed.normal[..., 1], posed.normal[..., 0])
+    for lo in range(0, len(pts), chunk):
+        q, h = pts[lo : lo + chunk], owner[lo : lo + chunk]
+        # blocking: another hypothesis' face within the pose/sensor tolerance, same normal
+        p_tol = 2 * sensor.position_error + (posed.eps_t[h][:, None] + posed.eps_t[None]) / 2
+        n_tol = 2 * sensor.normal_error + posed.rotation[h][:, None] + posed.rotation[None]
+        dist = point_segment_distance(q[:, None, None, :], posed.start[None], posed.end[None])
+        ang = np.arctan2(normals[lo : lo + chunk, 1], normals[lo : lo + chunk, 0])
+        turn = np.abs(wrap_angle(angle_faces[None] - ang[:, None, None]))
+        shared = (
+            (dist <= p_tol[..., None] + 1e-9 * posed.scale)
+            & (turn <= n_tol[..., None] + 1e-9)
+            & posed.valid[None]
+        ).any(axis=-1)
+        strength[lo : lo + chunk] = ((shared.astype(float) @ member) > 0) @ posed.class_weight
+    differs = strength < 1 - 1e-9
+    pts, normals, strength = pts[differs], normals[differs], strength[differs]
+    order = rng.permutation(len(pts))
+    order = order[np.argsort(strength[order], kind="stable")]
+    # one aim per cell of a spacing grid, weakest blocking first
+    spacing = max(float(np.median(posed.length[posed.valid])) / 4, 1e-6 * posed.scale)
+    cells = np.floor(pts[order] / spacing).astype(np.int64)
+    _, first = np.unique(cells, axis=0, return_index=True)
+    chosen = order[np.sort(first)][: config.boundary_aims]
+    return pts[chosen], normals[chosen]
+
+
+def _dedupe(
+    c: Candidates, workspace: Workspace, config: CandidateConfig, keep: int = 0
+) -> np.ndarray:
+    """Indices of the first path of each (direction, line offset) cell, in order;
+    the first `keep` paths are kept whatever their cell."""
+    if len(c) == 0:
+        return np.zeros(0, dtype=int)
+    offset_step = config.offset_step or workspace.radius / 200
+    angle = np.arctan2(c.directions[:, 1], c.directions[:, 0])
+    n_steps = max(1, round(2 * math.pi / config.angle_step))
+    k_angle = np.round(angle / config.angle_step).astype(np.int64) % n_steps
+    rel = c.origins - np.asarray(workspace.center)
+    offset = c.directions[:, 0] * rel[:, 1] - c.directions[:, 1] * rel[:, 0]
+    k_offset = np.round(offset / offset_step).astype(np.int64)
+    _, first = np.unique(np.stack([k_angle, k_offset], axis=1), axis=0, return_index=True)
+    return np.union1d(np.arange(keep), first)
+
+
+def generate_candidates(
+    posed: PosedSet,
+    workspace: Workspace,
+    sensor: SensorBounds,
+    config: CandidateConfig | None = None,
+    rng: np.random.Generator | None = None,
+    *,
+    sensor_position: Sequence[float] | None = None,
+    extra: Candidates | None = None,
+) -> Candidates:
+    """The candidate paths for a posed hypothesis set (world frame).
+
+    IA aims get `config.origins` origins spread on the safe circle (the first at
+    the sensor's place); paths end at the aim, inside every outline. Boundary
+    aims sit just inside a face (by twice the largest tolerance) and are
+    approached head on and at +-`config.oblique`. Extra paths are kept whole and
+    first; the general ones are deduped and, beyond `config.count`, subsampled
+    with `rng`.
+    """
+    config = config or CandidateConfig()
+    rng = rng if rng is not None else np.random.default_rng(0)
+    centre = np.asarray(workspace.center, dtype=float)
+    sensor_xy = (
+        centre + np.array([workspace.radius, 0.0]) if sensor_position is None else sensor_position
+    )
+    rel = np.asarray(sensor_xy, dtype=float) - centre
+    start_angle = math.atan2(rel[1], rel[0]) if np.any(rel) else 0.0
+    parts = []
+
+    ia = intersection_aims(posed, config.intersection_aims, config.grid)
+    if len(ia) and config.origins:
+        origins = _ring_points(workspace, config.origins, start_angle)
+        o = np.repeat(origins[None], len(ia), axis=0).reshape(-1, 2)
+        a = np.repeat(ia, len(origins), axis=0)
+        span = a - o
+        length = np.hypot(*span.T)
+        ok = length > 1e-9 * workspace.radius
+        parts.append(_make(o[ok], span[ok] / length[ok, None], length[ok], a[ok], "intersection"))
+
+    points, normals = _boundary_aims(posed, sensor, config, rng)
+    if len(points):
+        inset = 2 * (2 * sensor.position_error + posed.eps_t.max()) + 5e-3 * workspace.radius
+        aims = points - inset * normals
+        turns = [0.0, config.oblique, -config.oblique] if config.oblique > 0 else [0.0]
+        for turn in turns:
+            c, s = math.cos(turn), math.sin(turn)
+            d = -normals @ np.array([[c, s], [-s, c]])
+            o, to_aim, _ = paths_through(aims, d, workspace)
+            ok = np.isfinite(to_aim) & (to_aim > 1e-9 * workspace.radius)
+            parts.append(_make(o[ok], d[ok], to_aim[ok], aims[ok], "boundary"))
+
+    extra = extra if extra is not None else Candidates.empty()
+    merged = Candidates.concat([extra, *parts])
+    merged = merged.subset(_dedupe(merged, workspace, config, keep=len(extra)))
+    n_general = len(merged) - len(extra)
+    cap = candidate_cap(config, len(posed))
+    if n_general > cap:
+        pick = np.sort(rng.choice(n_general, cap, replace=False)) + len(extra)
+        merged = merged.subset(np.concatenate([np.arange(len(extra)), pick]))
+    return merged
+
+
+def candidate_cap(config: CandidateConfig, n_hypotheses: int) -> int:
+    """How many general candidates to keep for `n_hypotheses` hypotheses.
+
+    >>> candidate_cap(CandidateConfig(), 50), candidate_cap(CandidateConfig(), 128)
+    (256, 64)
+    """
+    ratio = min(1.0, config.full_size_hypotheses / max(n_hypotheses, 1))
+    # cost ~ candidates x hypotheses^2: keep it near the full-size budget
+    return min(config.count, max(config.min_count, int(config.count * ratio * ratio)))
+
+
+def _make(o: np.ndarray, d: np.ndarray, length: np.ndarray, aims: np.ndarray, source: str):
+    return Candidates(o, d, length, aims, np.full(len(length), source, dtype="<U12"))
