@@ -115,6 +115,14 @@ def build_parser() -> argparse.ArgumentParser:
     mesh.add_argument("--max-poses", type=int, default=None)
     mesh.add_argument("--out", default=None, help="write an object file instead of printing")
     mesh.set_defaults(func=cmd_import_mesh)
+
+    from app.serve import add_serve_command
+
+    add_serve_command(sub)
+
+    from hardware_sim.experiments import add_simulate_command
+
+    add_simulate_command(sub)
     return parser
 
 

@@ -1,0 +1,179 @@
+"""JSON (DESIGN §6) <-> planner objects: observations, stored sessions, answers.
+
+>>> obs = observation_from_dict(
+...     {"path": {"origin": [0, -10], "direction": [0, 2], "length": 20}, "contact": None})
+>>> observation_to_dict(obs)["path"]["direction"]
+[0.0, 1.0]
+"""
+
+from __future__ import annotations
+
+import hashlib
+import json
+import math
+from collections.abc import Mapping
+from typing import Any
+
+from app.schemas import (
+    ErrorBoundOut,
+    HypothesisOut,
+    ObservationOut,
+    PlannedPathOut,
+    PlanOut,
+    PoseOut,
+    SensorOut,
+    SessionOut,
+    StrategyOut,
+    WorkspaceOut,
+)
+from app.store import SessionRecord
+from planner.interpretation import RecognitionConfig
+from planner.library import object_from_dict
+from planner.session import Session
+from planner.strategies import Plan, StrategyConfig
+from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
+
+__all__ = [
+    "build_session",
+    "derive",
+    "etag",
+    "fingerprint",
+    "if_match_ok",
+    "observation_from_dict",
+    "observation_to_dict",
+    "plan_out",
+    "session_out",
+    "strategy_config",
+]
+
+
+def etag(version: int) -> str:
+    return f'"{version}"'
+
+
+def if_match_ok(header: str | None, version: int) -> bool:
+    """RFC 9110 If-Match against the session's strong ETag (`*` matches any version)."""
+    if header is None:
+        return True
+    tags = [t.strip() for t in header.split(",")]
+    return any(t == "*" or t.removeprefix("W/") == etag(version) for t in tags)
+
+
+def fingerprint(method: str, path: str, query: str, body: Any) -> str:
+    """A request's identity for Idempotency-Key: route, query and canonical JSON body."""
+    text = json.dumps([method, path, query, body], sort_keys=True, separators=(",", ":"))
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def observation_from_dict(data: Mapping[str, Any]) -> Observation:
+    """The planner's observation from its §6 JSON (validated, direction normalized)."""
+    path = data["path"]
+    contact = data.get("contact")
+    return Observation(
+        SensingPath(tuple(path["origin"]), tuple(path["direction"]), float(path["length"])),
+        None
+        if contact is None
+        else Contact(tuple(contact["point"]), tuple(contact["normal"]), contact.get("normal_z")),
+    )
+
+
+def observation_to_dict(obs: Observation) -> dict[str, Any]:
+    p = obs.path
+    out: dict[str, Any] = {
+        "path": {"origin": list(p.origin), "direction": list(p.direction), "length": p.length},
+        "contact": None,
+    }
+    if obs.contact is not None:
+        c = obs.contact
+        out["contact"] = {"point": list(c.point), "normal": list(c.normal)}
+        if c.normal_z is not None:
+            out["contact"]["normal_z"] = c.normal_z
+    return out
+
+
+def build_session(record: SessionRecord) -> Session:
+    cfg = record.config
+    models = [object_from_dict(o, field=f"objects[{i}]") for i, o in enumerate(cfg["objects"])]
+    return Session(
+        models,
+        SensorBounds(**cfg["sensor"]),
+        Workspace(tuple(cfg["workspace"]["center"]), cfg["workspace"]["radius"]),
+        RecognitionConfig(max_outliers=cfg["max_outliers"]),
+        [observation_from_dict(o) for o in record.observations],
+    )
+
+
+def derive(session: Session) -> Session:
+    session.hypotheses  # noqa: B018 - compute (and cache) the derived state here, in a thread
+    return session
+
+
+def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:
+    s = cfg["strategy"]
+    return StrategyConfig(
+        name=s["name"],
+        depth=s["depth"],
+        budget_ms=s["budget_ms"],
+        max_paths=s["max_paths"],
+        motion_weight=s["motion_weight"],
+        grid_size=s["grid_size"],
+    )
+
+
+def _finite(x: float) -> float:
+    return float(x) if math.isfinite(x) else 0.0
+
+
+def session_out(
+    session_id: str, version: int, cfg: Mapping[str, Any], session: Session, limit: int | None
+) -> SessionOut:
+    hyps = session.hypotheses
+    shown = hyps if limit is None else hyps[:limit]
+    return SessionOut(
+        id=session_id,
+        version=version,
+        status=session.status,
+        objects=[m.name for m in session.models],
+        sensor=SensorOut(**cfg["sensor"]),
+        workspace=WorkspaceOut(**cfg["workspace"]),
+        sensor_position=cfg["sensor_position"],
+        strategy=StrategyOut(**cfg["strategy"]),
+        max_outliers=cfg["max_outliers"],
+        observations=[
+            ObservationOut(index=i, **observation_to_dict(o))
+            for i, o in enumerate(session.observations)
+        ],
+        hypotheses=[
+            HypothesisOut(
+                object=h.object,
+                stable_pose=h.stable_pose,
+                pose=PoseOut(x=h.pose.x, y=h.pose.y, theta=h.pose.theta),
+                error_bound=ErrorBoundOut(
+                    translation=_finite(h.error_bound.translation),
+                    rotation=_finite(h.error_bound.rotation),
+                    eps_t=_finite(h.error_bound.eps_t),
+                ),
+                probability=min(max(h.probability, 0.0), 1.0),
+                assignment=list(h.assignment),
+                equivalence_class=h.equivalence_class,
+            )
+            for h in shown
+        ],
+        hypothesis_count=len(hyps),
+        class_count=len({h.equivalence_class for h in hyps}),
+    )
+
+
+def plan_out(result: Plan, version: int, limit: int) -> PlanOut:
+    data = result.as_dict(limit=limit)
+    return PlanOut(
+        status=data["status"],
+        truncated=data["truncated"],
+        elapsed_ms=data["elapsed_ms"],
+        paths=[PlannedPathOut(**p) for p in data["paths"]],
+        strategy=data.get("strategy", ""),
+        note=data.get("note"),
+        candidates=data.get("candidates", 0),
+        classes=data.get("classes", 0),
+        version=version,
+    )

@@ -1,0 +1,89 @@
+"""Dependencies of the routes, as ``Annotated`` aliases.
+
+Settings and the service live on ``app.state`` (set by :func:`app.main.create_app`
+and its lifespan); nothing here is a module-level global.
+"""
+
+from __future__ import annotations
+
+import secrets
+import uuid
+from typing import Annotated, Any
+
+from fastapi import Depends, Header, Path, Request
+from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
+
+from app.errors import UnauthorizedError
+from app.service import SessionService
+from app.settings import Settings
+
+__all__ = [
+    "IdempotencyKey",
+    "IfMatch",
+    "ServiceDep",
+    "SessionId",
+    "SettingsDep",
+    "auth_dependencies",
+    "require_api_key",
+]
+
+
+def get_settings(request: Request) -> Settings:
+    return request.app.state.settings
+
+
+def get_service(request: Request) -> SessionService:
+    service: SessionService | None = getattr(request.app.state, "service", None)
+    if service is None:  # only before the lifespan started or after it ended
+        raise RuntimeError("the service is not running (lifespan not started)")
+    return service
+
+
+SettingsDep = Annotated[Settings, Depends(get_settings)]
+ServiceDep = Annotated[SessionService, Depends(get_service)]
+
+_bearer = HTTPBearer(auto_error=False, description="the API key, when the service has one")
+
+
+async def require_api_key(
+    settings: SettingsDep,
+    credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
+) -> None:
+    """With ``TACTILE_API_KEY`` set, every /v1 request needs ``Authorization: Bearer <key>``."""
+    if settings.api_key is None:
+        return
+    expected = settings.api_key.get_secret_value().encode()
+    given = (credentials.credentials if credentials else "").encode()
+    if not secrets.compare_digest(given, expected):
+        raise UnauthorizedError(
+            "missing or wrong API key (Authorization: Bearer <key>)",
+            field="Authorization",
+            headers={"WWW-Authenticate": 'Bearer realm="tactile"'},
+        )
+
+
+def auth_dependencies(settings: Settings) -> list[Any]:
+    """The routers' dependencies: the API key check (and its OpenAPI security scheme)
+    only when the service has a key."""
+    return [Depends(require_api_key)] if settings.api_key is not None else []
+
+
+SessionId = Annotated[uuid.UUID, Path(description="session id (a random UUID)")]
+IfMatch = Annotated[
+    str | None,
+    Header(
+        alias="If-Match",
+        max_length=512,
+        description='the session\'s ETag ("<version>"); a stale one is answered 412',
+    ),
+]
+IdempotencyKey = Annotated[
+    str | None,
+    Header(
+        alias="Idempotency-Key",
+        min_length=1,
+        max_length=255,
+        pattern=r"^[\x21-\x7e]+$",
+        description="replays the first answer to a retried request (other body: 422)",
+    ),
+]

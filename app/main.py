@@ -1,0 +1,129 @@
+"""The FastAPI application (DESIGN §6): ``create_app(settings)`` and the default ``app``.
+
+``app`` is built on first access from the environment (``TACTILE_*``), so
+``uvicorn app.main:app`` works and importing this module has no side effect::
+
+    from app.main import create_app
+    from app.settings import Settings
+    app = create_app(Settings(db_path="/var/lib/tactile/tactile.db"))
+"""
+
+from __future__ import annotations
+
+from collections.abc import AsyncIterator
+from contextlib import asynccontextmanager
+from typing import Any
+
+import structlog
+from fastapi import FastAPI
+from fastapi.routing import APIRoute
+
+from app.errors import PROBLEM_MEDIA_TYPE, install_error_handlers
+from app.observability import (
+    BodyLimitMiddleware,
+    RequestContextMiddleware,
+    configure_logging,
+    install_metrics,
+)
+from app.routes import health, objects, observations, pictures, plan, sessions
+from app.schemas import input_models
+from app.service import SessionService
+from app.settings import Settings
+from app.store import Store
+
+__all__ = ["TactileAPI", "create_app"]
+
+API_VERSION = "1.0.0"
+log = structlog.get_logger("app.main")
+
+
+def operation_id(route: APIRoute) -> str:
+    """Stable operation ids for generated clients: the route function's name."""
+    return route.name
+
+
+@asynccontextmanager
+async def lifespan(app: FastAPI) -> AsyncIterator[None]:
+    settings: Settings = app.state.settings
+    store = Store(
+        settings.db_path,
+        busy_timeout_ms=settings.busy_timeout_ms,
+        synchronous=settings.sqlite_synchronous,
+        pool_size=settings.db_pool_size,
+    )
+    service = SessionService(settings, store)
+    await service.run_db(store.open, settings.idempotency_ttl_s)
+    app.state.service = service
+    log.info("service started", db=str(settings.db_path), cpu_workers=settings.cpu_workers)
+    try:
+        yield
+    finally:
+        app.state.service = None
+        await service.run_db(store.close)
+        log.info("service stopped")
+
+
+def _problem_media_types(schema: dict[str, Any]) -> dict[str, Any]:
+    """Error answers are application/problem+json in the OpenAPI schema too."""
+    for item in schema.get("paths", {}).values():
+        for operation in item.values():
+            for status, response in operation.get("responses", {}).items():
+                content = response.get("content", {})
+                if status[:1] in "45" and "application/json" in content:
+                    content[PROBLEM_MEDIA_TYPE] = content.pop("application/json")
+    return schema
+
+
+class TactileAPI(FastAPI):
+    """FastAPI whose OpenAPI schema gives error answers as application/problem+json."""
+
+    def openapi(self) -> dict[str, Any]:
+        if self.openapi_schema is None:
+            self.openapi_schema = _problem_media_types(super().openapi())
+        return self.openapi_schema
+
+
+def create_app(settings: Settings | None = None) -> FastAPI:
+    """Build the service. `settings` default: read from the environment (``TACTILE_*``)."""
+    settings = settings or Settings()
+    configure_logging(settings.log_level, settings.log_json)
+    app = TactileAPI(
+        title="tactile-planner",
+        version=API_VERSION,
+        summary="Where to touch an unseen polygonal object to recognize and localize it.",
+        description=(
+            "Sessions are event-sourced: an object set, sensor bounds, a safe circle and "
+            "the ordered observations; hypotheses and plans are derived. Angles in radians, "
+            "lengths in the unit of the object files. Errors are RFC 9457 problem details. "
+            f"Limits: {settings.max_outline_vertices} vertices per ring, "
+            f"{settings.max_objects_per_session} objects and "
+            f"{settings.max_observations_per_session} observations per session, "
+            f"plan budget up to {settings.max_plan_budget_ms:g} ms, "
+            f"request bodies up to {settings.max_body_bytes} bytes."
+        ),
+        lifespan=lifespan,
+        generate_unique_id_function=operation_id,
+    )
+    app.state.settings = settings
+    app.state.service = None
+    install_error_handlers(app)
+    inputs = input_models(settings)
+    for module in (objects, sessions, observations, plan, pictures, health):
+        app.include_router(module.build_router(inputs, settings))
+    install_metrics(app)
+    app.add_middleware(BodyLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+    app.add_middleware(RequestContextMiddleware)  # outermost: sees every answer
+    return app
+
+
+_default: FastAPI | None = None
+
+
+def __getattr__(name: str) -> Any:
+    """``app.main:app``: the default instance, built from the environment on first use."""
+    global _default
+    if name == "app":
+        if _default is None:
+            _default = create_app()
+        return _default
+    raise AttributeError(name)

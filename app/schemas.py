@@ -1,0 +1,345 @@
+"""Request and response bodies of the HTTP API (DESIGN §6; objects in the §8 format).
+
+Output schemas are plain module-level models. Input schemas carry the
+service's limits (vertices per outline, objects per session, plan budget, ...)
+as ``Field`` constraints so that they appear in the OpenAPI schema; since the
+limits are settings, the input models are built per app by
+:func:`input_models`. Vectors are JSON arrays ``[x, y]``, angles radians,
+lengths in the unit of the object files.
+
+>>> from app.settings import Settings
+>>> m = input_models(Settings(db_path="x.db"))
+>>> obs = m.ObservationIn.model_validate(
+...     {"path": {"origin": [0, -10], "direction": [0, 1], "length": 20}, "contact": None})
+>>> obs.path.length
+20.0
+"""
+
+import math
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    BaseModel,
+    ConfigDict,
+    Discriminator,
+    Field,
+    Tag,
+    model_validator,
+)
+
+from app.settings import Settings
+from planner.strategies import STRATEGIES
+
+__all__ = [
+    "ContactOut",
+    "ErrorBoundOut",
+    "Health",
+    "HypothesisOut",
+    "InputModels",
+    "ObjectCreated",
+    "ObjectList",
+    "ObjectOut",
+    "ObservationOut",
+    "PathOut",
+    "PlanOut",
+    "PlannedPathOut",
+    "PoseOut",
+    "SensorOut",
+    "SessionOut",
+    "StablePoseOut",
+    "Status",
+    "StrategyOut",
+    "WorkspaceOut",
+    "input_models",
+]
+
+Status = Literal["awaiting_contact", "ambiguous", "localized", "inconsistent"]
+StrategyName = Literal[STRATEGIES]  # type: ignore[valid-type]
+#: The planner refuses normal error bounds of pi/4 or more (radians).
+MAX_NORMAL_ERROR = math.pi / 4
+#: Object names: what the object files allow, less '/' and control characters (URL paths).
+NAME_PATTERN = r"^[^/\x00-\x1f\x7f]*[^/\s\x00-\x1f\x7f][^/\x00-\x1f\x7f]*$"
+
+Vec2Out = Annotated[list[float], Field(min_length=2, max_length=2)]
+
+
+# -- responses --------------------------------------------------------------------------------
+class PoseOut(BaseModel):
+    """Model-to-world pose: ``v_world = R(theta) v_model + (x, y)``; theta in radians."""
+
+    x: float
+    y: float
+    theta: float
+
+
+class ErrorBoundOut(BaseModel):
+    """|dt| of the translation, |dtheta| (radians) and the error disk diameter eps_t."""
+
+    translation: float
+    rotation: float
+    eps_t: float
+
+
+class HypothesisOut(BaseModel):
+    object: str
+    stable_pose: int = Field(ge=0)
+    pose: PoseOut
+    error_bound: ErrorBoundOut
+    probability: float = Field(ge=0, le=1)
+    assignment: list[int | None] = Field(
+        description="face index per contact, in contact order; null = spurious contact"
+    )
+    equivalence_class: int = Field(ge=0, description="0 = the most probable class")
+
+
+class PathOut(BaseModel):
+    origin: Vec2Out
+    direction: Vec2Out = Field(description="unit vector")
+    length: float
+
+
+class ContactOut(BaseModel):
+    point: Vec2Out
+    normal: Vec2Out = Field(description="measured outward unit normal")
+    normal_z: float | None = None
+
+
+class ObservationOut(BaseModel):
+    index: int = Field(ge=0)
+    path: PathOut
+    contact: ContactOut | None
+
+
+class SensorOut(BaseModel):
+    position_error: float
+    normal_error: float = Field(description="radians")
+
+
+class WorkspaceOut(BaseModel):
+    center: Vec2Out
+    radius: float
+
+
+class StrategyOut(BaseModel):
+    name: str
+    depth: int
+    budget_ms: float
+    max_paths: int
+    motion_weight: float
+    grid_size: int
+
+
+class SessionOut(BaseModel):
+    """A session's state: its configuration, observations and hypotheses (most probable
+    first; `hypothesis_count` is the length before any ``?limit=``)."""
+
+    id: str
+    version: int = Field(ge=1)
+    status: Status
+    objects: list[str]
+    sensor: SensorOut
+    workspace: WorkspaceOut
+    sensor_position: Vec2Out
+    strategy: StrategyOut
+    max_outliers: int
+    observations: list[ObservationOut]
+    hypotheses: list[HypothesisOut]
+    hypothesis_count: int = Field(ge=0)
+    class_count: int = Field(ge=0, description="equivalence classes left")
+
+
+class PlannedPathOut(BaseModel):
+    origin: Vec2Out
+    direction: Vec2Out
+    length: float
+    aim: Vec2Out
+    family: str = Field(description="distinguishing, informative, partial, uninformative, ...")
+    p_distinguishing: float
+    p_informative: float
+    expected_pruning: float
+    expected_remaining: float | None = Field(
+        description="expected touches still needed when taking this path (itself included)"
+    )
+    motion_cost: float | None
+    source: str | None = None
+
+
+class PlanOut(BaseModel):
+    status: Status
+    truncated: bool
+    elapsed_ms: float
+    paths: list[PlannedPathOut]
+    strategy: str
+    note: str | None = None
+    candidates: int = 0
+    classes: int = 0
+    version: int = Field(ge=1, description="session version the plan was made for")
+
+
+class ObjectCreated(BaseModel):
+    name: str
+
+
+class StablePoseOut(BaseModel):
+    outline: list[Vec2Out]
+    holes: list[list[Vec2Out]] | None = None
+    probability: float
+    normal_z: list[float] | None = None
+
+
+class ObjectOut(BaseModel):
+    """An object in the §8 format (always the ``stable_poses`` form)."""
+
+    name: str
+    stable_poses: list[StablePoseOut]
+    prior: float | None = None
+
+
+class ObjectList(BaseModel):
+    """A §8 object file: every registered object, by name."""
+
+    objects: list[ObjectOut]
+
+
+class Health(BaseModel):
+    status: str
+
+
+# -- requests ---------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class InputModels:
+    """The request models of one app (their limits come from its settings)."""
+
+    ObjectIn: type[BaseModel]
+    SessionCreate: type[BaseModel]
+    ObservationIn: type[BaseModel]
+
+
+def _only_one_shape(data: Any) -> Any:
+    if isinstance(data, dict):
+        if ("outline" in data) == ("stable_poses" in data):
+            raise ValueError("give exactly one of 'outline' or 'stable_poses'")
+        if "stable_poses" in data and ("holes" in data or "normal_z" in data):
+            raise ValueError("with 'stable_poses', 'holes' and 'normal_z' go in each pose")
+    return data
+
+
+def _object_or_name(value: Any) -> str:
+    return "object-name" if isinstance(value, str) else "inline-object"
+
+
+def input_models(settings: Settings) -> InputModels:
+    """Build the request models with the limits of `settings`."""
+    big = settings.max_coordinate
+    Coord = Annotated[float, Field(ge=-big, le=big, allow_inf_nan=False)]
+    Vec2 = Annotated[list[Coord], Field(min_length=2, max_length=2, description="[x, y]")]
+    Ring = Annotated[
+        list[Vec2],
+        Field(min_length=3, max_length=settings.max_outline_vertices, description="vertices"),
+    ]
+    Holes = Annotated[list[Ring], Field(max_length=settings.max_holes)]
+    NormalZ = Annotated[
+        list[Annotated[float, Field(ge=-1, le=1)]],
+        Field(max_length=settings.max_outline_vertices * (1 + settings.max_holes)),
+    ]
+    Name = Annotated[str, Field(min_length=1, max_length=200, pattern=NAME_PATTERN)]
+
+    class StablePoseIn(BaseModel):
+        model_config = ConfigDict(extra="forbid", title="StablePoseIn")
+        outline: Ring
+        holes: Holes = Field(default_factory=list)
+        probability: Annotated[float, Field(gt=0, le=1)] = 1.0
+        normal_z: NormalZ | None = None
+
+    class ObjectIn(BaseModel):
+        """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
+
+        model_config = ConfigDict(extra="forbid", title="ObjectIn")
+        name: Name
+        outline: Ring | None = None
+        holes: Holes | None = None
+        normal_z: NormalZ | None = None
+        stable_poses: (
+            Annotated[list[StablePoseIn], Field(min_length=1, max_length=settings.max_stable_poses)]
+            | None
+        ) = None
+        prior: Annotated[float, Field(gt=0, le=1e12, allow_inf_nan=False)] | None = None
+
+        _shape = model_validator(mode="before")(_only_one_shape)
+
+        def as_dict(self) -> dict[str, Any]:
+            return self.model_dump(exclude_none=True)
+
+    class SensorIn(BaseModel):
+        """Bounded sensor errors: contact position (length) and normal angle (radians)."""
+
+        model_config = ConfigDict(extra="forbid", title="SensorIn")
+        position_error: Annotated[float, Field(ge=0, le=big)] = 0.0
+        normal_error: Annotated[float, Field(ge=0, lt=MAX_NORMAL_ERROR)] = 0.0
+
+    class WorkspaceIn(BaseModel):
+        """The safe circle: known to contain the object; paths start on it."""
+
+        model_config = ConfigDict(extra="forbid", title="WorkspaceIn")
+        center: Vec2 = Field(default_factory=lambda: [0.0, 0.0])
+        radius: Annotated[float, Field(gt=0, le=big)] = 200.0
+
+    class StrategyIn(BaseModel):
+        model_config = ConfigDict(extra="forbid", title="StrategyIn")
+        name: StrategyName = settings.default_strategy  # type: ignore[assignment]
+        depth: Annotated[int, Field(ge=1, le=settings.max_lookahead_depth)] = min(
+            2, settings.max_lookahead_depth
+        )
+        budget_ms: Annotated[float, Field(gt=0, le=settings.max_plan_budget_ms)] = (
+            settings.default_budget_ms
+        )
+        max_paths: Annotated[int, Field(ge=1, le=settings.max_plan_paths)] = min(
+            5, settings.max_plan_paths
+        )
+        motion_weight: Annotated[float, Field(ge=0, le=1e6)] = 0.0
+        grid_size: Annotated[int, Field(ge=10, le=200)] = 70
+
+    ObjectRef = Annotated[
+        Annotated[Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],
+        Discriminator(_object_or_name),
+    ]
+
+    class SessionCreate(BaseModel):
+        """A new session: its object set (registered names or inline §8 objects), sensor
+        bounds, safe circle, the sensor's place on it, strategy and allowed outliers."""
+
+        model_config = ConfigDict(extra="forbid", title="SessionCreate")
+        objects: Annotated[
+            list[ObjectRef], Field(min_length=1, max_length=settings.max_objects_per_session)
+        ]
+        sensor: SensorIn = Field(default_factory=SensorIn)
+        workspace: WorkspaceIn = Field(default_factory=WorkspaceIn)
+        sensor_position: Vec2 | None = Field(
+            None, description="default: the point of the safe circle on its +x axis"
+        )
+        strategy: StrategyIn = Field(default_factory=StrategyIn)
+        max_outliers: Annotated[int, Field(ge=0, le=settings.max_outliers)] = 0
+
+    Length = Annotated[float, Field(gt=0, le=4 * big, allow_inf_nan=False)]
+
+    class PathIn(BaseModel):
+        model_config = ConfigDict(extra="forbid", title="PathIn")
+        origin: Vec2
+        direction: Vec2 = Field(description="non-zero; normalized by the service")
+        length: Length
+
+    class ContactIn(BaseModel):
+        model_config = ConfigDict(extra="forbid", title="ContactIn")
+        point: Vec2
+        normal: Vec2 = Field(description="measured outward normal; non-zero")
+        normal_z: Annotated[float, Field(ge=-1, le=1)] | None = None
+
+    class ObservationIn(BaseModel):
+        """One executed sensing path and what it touched (`contact` null: nothing)."""
+
+        model_config = ConfigDict(extra="forbid", title="ObservationIn")
+        path: PathIn
+        contact: ContactIn | None = None
+
+    return InputModels(ObjectIn=ObjectIn, SessionCreate=SessionCreate, ObservationIn=ObservationIn)

@@ -1,0 +1,112 @@
+"""``tactile serve [--host --port --workers --db]``: run the HTTP service with uvicorn.
+
+The listening socket is bound here, with ``TCP_NODELAY`` set on it (accepted
+connections inherit it on Linux), and handed to uvicorn: with several workers
+uvicorn passes its socket to the worker processes, which then lose
+TCP_NODELAY and add about 40 ms to each small response (uvicorn issue #3149).
+With several workers the settings reach the workers through the environment
+(``TACTILE_*``) and the metrics of all workers are aggregated through
+``PROMETHEUS_MULTIPROC_DIR`` (a temporary folder unless one is given).
+"""
+
+from __future__ import annotations
+
+import argparse
+import atexit
+import inspect
+import os
+import shutil
+import socket
+import tempfile
+from pathlib import Path
+from typing import Any
+
+__all__ = ["add_serve_command", "bind_socket", "cmd_serve"]
+
+
+def bind_socket(host: str, port: int, backlog: int = 2048) -> socket.socket:
+    """A listening TCP socket with SO_REUSEADDR and TCP_NODELAY (port 0: any free port)."""
+    family = socket.AF_INET6 if ":" in host else socket.AF_INET
+    sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
+    try:
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        sock.bind((host, port))
+        sock.listen(backlog)
+    except OSError:
+        sock.close()
+        raise
+    sock.set_inheritable(True)
+    return sock
+
+
+def _positive(text: str) -> int:
+    value = int(text)
+    if value < 1:
+        raise argparse.ArgumentTypeError("must be >= 1")
+    return value
+
+
+def _metrics_dir(workers: int) -> None:
+    if workers <= 1 or os.environ.get("PROMETHEUS_MULTIPROC_DIR"):
+        return
+    folder = tempfile.mkdtemp(prefix="tactile-metrics-")
+    os.environ["PROMETHEUS_MULTIPROC_DIR"] = folder
+    atexit.register(shutil.rmtree, folder, ignore_errors=True)
+
+
+def cmd_serve(args: argparse.Namespace) -> int:
+    import structlog
+    import uvicorn
+    from uvicorn.supervisors import Multiprocess
+
+    from app.observability import configure_logging
+    from app.settings import Settings
+
+    if args.db is not None:
+        os.environ["TACTILE_DB_PATH"] = str(Path(args.db).expanduser().resolve())
+    settings = Settings()
+    configure_logging(settings.log_level, settings.log_json)
+    _metrics_dir(args.workers)
+    sock = bind_socket(args.host, args.port)
+    host, port = sock.getsockname()[:2]
+    common: dict[str, Any] = {
+        "log_config": None,  # our structlog setup renders uvicorn's lines too
+        "access_log": False,  # one access line per request comes from our middleware
+        "lifespan": "on",
+        "timeout_graceful_shutdown": 10,
+        "proxy_headers": False,
+    }
+    structlog.get_logger("app.serve").info(
+        "listening",
+        host=host,
+        port=port,
+        workers=args.workers,
+        db=str(settings.db_path),
+        url=f"http://{host}:{port}",
+    )
+    if args.workers > 1:
+        config = uvicorn.Config("app.main:create_app", factory=True, workers=args.workers, **common)
+        if "target" in inspect.signature(Multiprocess).parameters:  # older uvicorn
+            server = uvicorn.Server(config)
+            Multiprocess(config, target=server.run, sockets=[sock]).run()  # type: ignore[call-arg]
+        else:
+            Multiprocess(config, sockets=[sock]).run()
+    else:
+        from app.main import create_app
+
+        config = uvicorn.Config(create_app(settings), **common)
+        uvicorn.Server(config).run(sockets=[sock])
+    return 0
+
+
+def add_serve_command(subparsers: Any) -> None:
+    """Add ``serve`` to the ``tactile`` command's subparsers."""
+    serve = subparsers.add_parser("serve", help="run the HTTP service (DESIGN §6)")
+    serve.add_argument("--host", default="127.0.0.1", help="address to listen on")
+    serve.add_argument("--port", type=int, default=8000, help="0: any free port (logged)")
+    serve.add_argument("--workers", type=_positive, default=1, help="worker processes")
+    serve.add_argument(
+        "--db", default=None, help="SQLite file (default: TACTILE_DB_PATH, else ./tactile.db)"
+    )
+    serve.set_defaults(func=cmd_serve)

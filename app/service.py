@@ -1,0 +1,452 @@
+"""What the routes call: stored sessions -> planner sessions -> answers.
+
+The planner does the work (:class:`planner.session.Session` derives the
+hypotheses, :func:`planner.strategies.plan` ranks paths, :mod:`planner.render`
+draws); this module only moves data between the store, the planner and JSON,
+and decides where work runs:
+
+- CPU work (fits, plans, pictures) runs in worker threads behind one
+  :class:`anyio.CapacityLimiter` (``cpu_workers``); SQLite calls run in threads
+  behind another (``db_pool_size``); the event loop never blocks.
+- One lock per session id: two requests on one session never compute on stale
+  state; across worker processes the store's version compare-and-swap does the
+  same (a lost race is recomputed, or answered 412 when the client sent If-Match).
+- Derived sessions and plans are cached per (id, version) in small LRUs.
+"""
+
+from __future__ import annotations
+
+import threading
+import uuid
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import contextmanager
+from dataclasses import dataclass
+from typing import Any, TypeVar
+
+import anyio
+import anyio.to_thread
+from pydantic import BaseModel
+
+from app.cache import LRU, KeyedLocks
+from app.convert import (
+    build_session,
+    derive,
+    etag,
+    if_match_ok,
+    observation_from_dict,
+    observation_to_dict,
+    plan_out,
+    session_out,
+    strategy_config,
+)
+from app.errors import (
+    ConflictError,
+    IdempotencyInFlightError,
+    IdempotencyMismatchError,
+    InvalidInputError,
+    LimitExceededError,
+    NotFoundError,
+    PreconditionFailedError,
+)
+from app.settings import Settings
+from app.store import (
+    IdempotentWrite,
+    SessionGoneError,
+    SessionRecord,
+    Store,
+    StoredResponse,
+    VersionConflictError,
+)
+from planner.errors import PlannerError
+from planner.library import object_from_dict, object_to_dict
+from planner.session import Session
+from planner.strategies import Plan, plan
+from planner.types import ObjectModel, SensorBounds, Workspace
+
+__all__ = ["Answer", "SessionService"]
+
+_T = TypeVar("_T")
+#: Retries of a write that lost the version race to another process (no If-Match).
+_CAS_ATTEMPTS = 8
+
+
+@dataclass(frozen=True)
+class Answer:
+    """A finished response: status, JSON body bytes and headers (ETag, Location, ...)."""
+
+    status: int
+    body: bytes
+    headers: dict[str, str]
+    replayed: bool = False
+
+
+def _json(model: BaseModel) -> bytes:
+    return model.model_dump_json().encode()
+
+
+def _next_state(
+    record: SessionRecord,
+    current: Session,
+    step: Callable[[SessionRecord, Session], Session],
+    limit: int | None,
+) -> tuple[Session, bytes]:
+    """The session after `step`, derived, and its JSON at the next version (in a thread)."""
+    new = derive(step(record, current))
+    return new, _json(session_out(record.id, record.version + 1, record.config, new, limit))
+
+
+class SessionService:
+    """Sessions over a :class:`Store`, with the planner doing the work in threads."""
+
+    def __init__(self, settings: Settings, store: Store) -> None:
+        self.settings = settings
+        self.store = store
+        self.cpu = anyio.CapacityLimiter(settings.cpu_workers)
+        self.db = anyio.CapacityLimiter(settings.db_pool_size)
+        self.locks = KeyedLocks()
+        self.sessions: LRU[tuple[str, int], Session] = LRU(settings.session_cache_size)
+        self.plans: LRU[tuple[str, int], Plan] = LRU(settings.plan_cache_size)
+        self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
+        self._in_flight: set[tuple[str, str]] = set()
+        self._render_lock = threading.Lock()  # matplotlib: one figure drawn at a time
+
+    # -- running work off the event loop ----------------------------------------------------
+    async def run_cpu(self, fn: Callable[..., _T], *args: Any) -> _T:
+        return await anyio.to_thread.run_sync(fn, *args, limiter=self.cpu)
+
+    async def run_db(self, fn: Callable[..., _T], *args: Any) -> _T:
+        return await anyio.to_thread.run_sync(fn, *args, limiter=self.db)
+
+    @contextmanager
+    def _claim(self, scope: str, key: str | None) -> Iterator[None]:
+        """Mark an idempotency key as in flight (a second request with it gets 409)."""
+        if key is None:
+            yield
+            return
+        if (scope, key) in self._in_flight:
+            raise IdempotencyInFlightError(
+                "a request with this Idempotency-Key is still being processed; retry later",
+                field="Idempotency-Key",
+                headers={"Retry-After": "1"},
+            )
+        self._in_flight.add((scope, key))
+        try:
+            yield
+        finally:
+            self._in_flight.discard((scope, key))
+
+    @staticmethod
+    def _replay(stored: StoredResponse, fp: str) -> Answer:
+        if stored.fingerprint != fp:
+            raise IdempotencyMismatchError(
+                "this Idempotency-Key was used with another request body",
+                field="Idempotency-Key",
+            )
+        return Answer(stored.status, stored.body, dict(stored.headers), replayed=True)
+
+    async def _record(self, session_id: str) -> SessionRecord:
+        record = await self.run_db(self.store.get_session, session_id)
+        if record is None:
+            raise NotFoundError(f"no session {session_id}", field="id")
+        return record
+
+    async def _session(self, record: SessionRecord) -> Session:
+        """The derived session of a record (cached per version; caller holds the lock)."""
+        key = (record.id, record.version)
+        session = self.sessions.get(key)
+        if session is None:
+            session = await self.run_cpu(lambda: derive(build_session(record)))
+            self.sessions.put(key, session)
+        return session
+
+    def _forget(self, session_id: str) -> None:
+        self.sessions.drop(lambda k: k[0] == session_id)
+        self.plans.drop(lambda k: k[0] == session_id)
+        self.pictures.drop(lambda k: k[0] == session_id)
+
+    # -- objects ----------------------------------------------------------------------------
+    async def register_object(self, data: dict[str, Any]) -> tuple[bool, str]:
+        try:
+            model = await self.run_cpu(object_from_dict, data)
+        except PlannerError as exc:  # name fields from the body's root, like validation does
+            field = (exc.field or "").removeprefix("object").removeprefix(".") or None
+            raise type(exc)(exc.message, field=field) from exc
+        created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
+        return created, model.name
+
+    # -- sessions ---------------------------------------------------------------------------
+    async def _models(self, refs: Sequence[str | dict[str, Any]]) -> list[ObjectModel]:
+        names = [r for r in refs if isinstance(r, str)]
+        stored = await self.run_db(self.store.get_objects, names) if names else {}
+
+        def build() -> list[ObjectModel]:
+            models = []
+            for i, ref in enumerate(refs):
+                if isinstance(ref, str):
+                    if ref not in stored:
+                        raise InvalidInputError(
+                            f"no registered object named {ref!r}; register it with "
+                            "POST /v1/objects or give it inline",
+                            field=f"objects[{i}]",
+                        )
+                    models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
+                else:
+                    models.append(object_from_dict(ref, field=f"objects[{i}]"))
+            seen: dict[str, int] = {}
+            for i, m in enumerate(models):
+                if m.name in seen:
+                    raise InvalidInputError(
+                        f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                        field=f"objects[{i}]",
+                    )
+                seen[m.name] = i
+            return models
+
+        return await self.run_cpu(build)
+
+    async def create_session(
+        self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None
+    ) -> Answer:
+        scope = "sessions"
+        with self._claim(scope, idem_key):
+            if idem_key and (old := await self.run_db(self.store.get_idempotent, scope, idem_key)):
+                return self._replay(old, fp)
+            models = await self._models(body["objects"])
+            ws = body["workspace"]
+            workspace = Workspace(tuple(ws["center"]), ws["radius"])
+            sensor = SensorBounds(**body["sensor"])
+            position = body.get("sensor_position") or [
+                workspace.center[0] + workspace.radius,
+                workspace.center[1],
+            ]
+            cfg = {
+                "objects": [object_to_dict(m) for m in models],
+                "sensor": {
+                    "position_error": sensor.position_error,
+                    "normal_error": sensor.normal_error,
+                },
+                "workspace": {"center": list(workspace.center), "radius": workspace.radius},
+                "sensor_position": [float(v) for v in position],
+                "strategy": dict(body["strategy"]),
+                "max_outliers": body["max_outliers"],
+            }
+            strategy_config(cfg)  # the planner's own checks
+            record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
+            session = await self.run_cpu(lambda: derive(build_session(record)))
+            body = await self.run_cpu(lambda: _json(session_out(record.id, 1, cfg, session, limit)))
+            headers = {"ETag": etag(1), "Location": f"/v1/sessions/{record.id}"}
+            answer = Answer(201, body, headers)
+            idem = self._idem(scope, idem_key, fp, answer)
+            if (old := await self.run_db(self.store.create_session, record, idem)) is not None:
+                return self._replay(old, fp)
+            self.sessions.put((record.id, 1), session)
+            return answer
+
+    @staticmethod
+    def _idem(scope: str, key: str | None, fp: str, answer: Answer) -> IdempotentWrite | None:
+        if key is None:
+            return None
+        return IdempotentWrite(
+            scope, key, StoredResponse(fp, answer.status, answer.body, answer.headers)
+        )
+
+    async def get_session(self, session_id: str, limit: int | None) -> Answer:
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            session = await self._session(record)
+        body = await self.run_cpu(
+            lambda: _json(session_out(session_id, record.version, record.config, session, limit))
+        )
+        return Answer(200, body, {"ETag": etag(record.version)})
+
+    async def _mutate(
+        self,
+        session_id: str,
+        scope: str,
+        idem_key: str | None,
+        fp: str,
+        if_match: str | None,
+        step: Callable[[SessionRecord, Session], Session],
+        write: Callable[[SessionRecord, IdempotentWrite | None], StoredResponse | None],
+        status: int,
+        limit: int | None,
+    ) -> Answer:
+        """Compute the next state from the current one and store it (CAS on version)."""
+        with self._claim(scope, idem_key):
+            async with self.locks.hold(session_id):
+                old = idem_key and await self.run_db(self.store.get_idempotent, scope, idem_key)
+                if old:
+                    return self._replay(old, fp)
+                for _ in range(_CAS_ATTEMPTS):
+                    record = await self._record(session_id)
+                    if not if_match_ok(if_match, record.version):
+                        raise PreconditionFailedError(
+                            f"session is at version {record.version} ({etag(record.version)})",
+                            field="If-Match",
+                            headers={"ETag": etag(record.version)},
+                        )
+                    current = await self._session(record)
+                    version = record.version + 1
+                    new, body = await self.run_cpu(_next_state, record, current, step, limit)
+                    answer = Answer(status, body, {"ETag": etag(version)})
+                    idem = self._idem(scope, idem_key, fp, answer)
+                    try:
+                        old = await self.run_db(write, record, idem)
+                    except VersionConflictError as exc:
+                        if if_match is not None:
+                            raise PreconditionFailedError(
+                                f"session is at version {exc.current}",
+                                field="If-Match",
+                                headers={"ETag": etag(exc.current)},
+                            ) from exc
+                        continue  # another process wrote first: recompute on its state
+                    except SessionGoneError as exc:
+                        self._forget(session_id)
+                        raise NotFoundError(f"no session {session_id}", field="id") from exc
+                    if old is not None:
+                        return self._replay(old, fp)
+                    self.sessions.put((session_id, version), new)
+                    return answer
+                raise ConflictError("the session kept changing; retry", field="id")
+
+    async def add_observation(
+        self,
+        session_id: str,
+        body: dict[str, Any],
+        idem_key: str | None,
+        fp: str,
+        if_match: str | None,
+        limit: int | None,
+    ) -> Answer:
+        observation = observation_from_dict(body)  # planner checks: zero vectors, behind origin
+        stored = observation_to_dict(observation)
+        cap = self.settings.max_observations_per_session
+
+        def step(record: SessionRecord, session: Session) -> Session:
+            if len(record.observations) >= cap:
+                raise LimitExceededError(
+                    f"a session holds at most {cap} observations", field="observations"
+                )
+            return session.observe(observation)
+
+        def write(record: SessionRecord, idem: IdempotentWrite | None) -> StoredResponse | None:
+            return self.store.append_observation(session_id, record.version, stored, idem)
+
+        return await self._mutate(
+            session_id, f"sessions/{session_id}/observations", idem_key, fp, if_match, step,
+            write, 201, limit,
+        )  # fmt: skip
+
+    async def undo(
+        self,
+        session_id: str,
+        idem_key: str | None,
+        fp: str,
+        if_match: str | None,
+        limit: int | None,
+    ) -> Answer:
+        def step(record: SessionRecord, session: Session) -> Session:
+            if not record.observations:
+                raise ConflictError("the session has no observation to undo", field="observations")
+            return session.undo()
+
+        def write(record: SessionRecord, idem: IdempotentWrite | None) -> StoredResponse | None:
+            return self.store.drop_last_observation(session_id, record.version, idem)
+
+        return await self._mutate(
+            session_id, f"sessions/{session_id}/undo", idem_key, fp, if_match, step, write,
+            200, limit,
+        )  # fmt: skip
+
+    async def delete_session(self, session_id: str, if_match: str | None) -> None:
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            if not if_match_ok(if_match, record.version):
+                raise PreconditionFailedError(
+                    f"session is at version {record.version}",
+                    field="If-Match",
+                    headers={"ETag": etag(record.version)},
+                )
+            expected = None if if_match is None else record.version
+            try:
+                await self.run_db(self.store.delete_session, session_id, expected)
+            except VersionConflictError as exc:
+                raise PreconditionFailedError(
+                    f"session is at version {exc.current}", field="If-Match"
+                ) from exc
+            except SessionGoneError as exc:
+                raise NotFoundError(f"no session {session_id}", field="id") from exc
+            finally:
+                self._forget(session_id)
+
+    # -- plans and pictures -----------------------------------------------------------------
+    async def _plan(self, record: SessionRecord, session: Session) -> Plan:
+        key = (record.id, record.version)
+        cached = self.plans.get(key)
+        if cached is not None:
+            return cached
+        cfg = record.config
+        seed = uuid.UUID(record.id).int % (2**63) ^ record.version
+        result = await self.run_cpu(
+            lambda: plan(
+                session.hypotheses,
+                session.models,
+                session.sensor,
+                session.workspace,
+                cfg["sensor_position"],
+                strategy_config(cfg),
+                seed,
+                observations=session.observations,
+            )
+        )
+        self.plans.put(key, result)
+        return result
+
+    async def get_plan(self, session_id: str, limit: int) -> Answer:
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            session = await self._session(record)
+            result = await self._plan(record, session)
+        out = plan_out(result, record.version, limit)
+        return Answer(200, _json(out), {"ETag": etag(record.version)})
+
+    async def picture(self, session_id: str, kind: str, view: str, dpi: int) -> Answer:
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            key = (session_id, record.version, kind, view, dpi)
+            image = self.pictures.get(key)
+            if image is None:
+                session = await self._session(record)
+                result = await self._plan(record, session)
+                image = await self.run_cpu(self._draw, session, result, record, kind, view, dpi)
+                self.pictures.put(key, image)
+        media = "image/svg+xml" if kind == "svg" else "image/png"
+        return Answer(200, image, {"ETag": etag(record.version), "Content-Type": media})
+
+    def _draw(
+        self, session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
+    ) -> bytes:
+        from planner.grid import build_grid
+        from planner.mii import build_mii
+        from planner.render import render_png, render_svg
+
+        hyps = session.hypotheses
+        cfg = record.config
+        mii = build_mii(hyps, session.models) if view in ("vector", "both") else None
+        grid = (
+            build_grid(hyps, session.models, cfg["strategy"]["grid_size"])
+            if view in ("grid", "both")
+            else None
+        )
+        kwargs: dict[str, Any] = {
+            "contacts": session.observations,
+            "workspace": session.workspace,
+            "sensor_position": cfg["sensor_position"],
+            "paths": [p.path for p in result.paths],
+            "p_distinguishing": [p.p_distinguishing for p in result.paths],
+            "title": f"session {record.id[:8]} v{record.version}: {session.status}",
+        }
+        with self._render_lock:
+            if kind == "svg":
+                return render_svg(mii, grid, **kwargs)
+            return render_png(mii, grid, dpi=dpi, **kwargs)

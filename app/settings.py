@@ -1,0 +1,78 @@
+"""Service settings (DESIGN §6): read from the environment with the prefix ``TACTILE_``.
+
+Every limit the service enforces is a setting here; :func:`app.main.create_app`
+takes a :class:`Settings` instance (never a module global), so tests and
+``tactile serve`` build apps with their own.
+
+>>> Settings(db_path="/tmp/x.db", max_objects_per_session=4).max_objects_per_session
+4
+"""
+
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Literal
+
+from pydantic import Field, SecretStr, field_validator, model_validator
+from pydantic_settings import BaseSettings, SettingsConfigDict
+
+__all__ = ["Settings"]
+
+
+class Settings(BaseSettings):
+    """One service instance's configuration (env ``TACTILE_DB_PATH``, ``TACTILE_API_KEY``...)."""
+
+    model_config = SettingsConfigDict(env_prefix="TACTILE_", extra="ignore", frozen=True)
+
+    # storage
+    db_path: Path = Field(Path("tactile.db"), description="SQLite file (never ':memory:')")
+    busy_timeout_ms: int = Field(5000, ge=0, le=600_000)
+    sqlite_synchronous: Literal["NORMAL", "FULL", "EXTRA"] = "FULL"
+    db_pool_size: int = Field(4, ge=1, le=64, description="SQLite connections (and DB threads)")
+    session_cache_size: int = Field(64, ge=1, le=100_000, description="derived sessions kept")
+    plan_cache_size: int = Field(64, ge=1, le=100_000)
+
+    # CPU work
+    cpu_workers: int = Field(2, ge=1, le=256, description="fits and plans running at once")
+
+    # request limits
+    max_body_bytes: int = Field(1_000_000, ge=1024, le=1_000_000_000)
+    max_outline_vertices: int = Field(500, ge=3, le=100_000)
+    max_holes: int = Field(16, ge=0, le=10_000)
+    max_stable_poses: int = Field(32, ge=1, le=10_000)
+    max_objects_per_session: int = Field(16, ge=1, le=10_000)
+    max_observations_per_session: int = Field(100, ge=1, le=100_000)
+    max_outliers: int = Field(3, ge=0, le=100)
+    max_plan_budget_ms: float = Field(10_000.0, gt=0, le=3_600_000)
+    max_lookahead_depth: int = Field(4, ge=1, le=64)
+    max_plan_paths: int = Field(50, ge=1, le=10_000)
+    max_coordinate: float = Field(1e6, gt=0, le=1e12, description="|x|, |y| and lengths")
+    max_image_dpi: int = Field(300, ge=10, le=1200)
+    max_list_objects: int = Field(1000, ge=1, le=1_000_000)
+
+    # defaults of a new session
+    default_strategy: str = "lookahead"
+    default_budget_ms: float = Field(500.0, gt=0)
+
+    # access and logs
+    api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    log_level: Literal["debug", "info", "warning", "error"] = "info"
+    log_json: bool = True
+    idempotency_ttl_s: float = Field(7 * 24 * 3600.0, gt=0)
+
+    @field_validator("db_path")
+    @classmethod
+    def _not_in_memory(cls, value: Path) -> Path:
+        if str(value).strip() in ("", ":memory:") or str(value).startswith("file::memory:"):
+            raise ValueError("an in-memory database is not shared between threads; give a file")
+        return value
+
+    @model_validator(mode="after")
+    def _defaults_within_limits(self) -> Settings:
+        from planner.strategies import STRATEGIES
+
+        if self.default_strategy not in STRATEGIES:
+            raise ValueError(f"default_strategy must be one of {list(STRATEGIES)}")
+        if self.default_budget_ms > self.max_plan_budget_ms:
+            raise ValueError("default_budget_ms must not exceed max_plan_budget_ms")
+        return self
