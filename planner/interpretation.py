@@ -34,7 +34,7 @@ from planner.constraints import (
 )
 from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
 from planner.memo import cached_property
-from planner.pose import fit_batch, noise_scales, worst_case_bounds
+from planner.pose import fit_batch, noise_scales, point_bounds, worst_case_bounds
 from planner.types import Contact, ObjectModel, Observation, SensorBounds, StablePose, Workspace
 
 __all__ = ["Candidates", "Group", "RecognitionConfig", "TreeLevel", "evaluate", "extend"]
@@ -248,12 +248,14 @@ def evaluate(
         d_th = eps_t0 / (2 * r_c)
         d_t = eps_t0 / 2 + np.hypot(*stable.centroid) * d_th
     else:
-        dq, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
+        _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
+        # first-order worst case at the model origin and at every outline vertex
+        moved = point_bounds(fit, np.vstack([[0.0, 0.0], stable.outline]), assigned, eps_d, phi)
         # second-order allowance for the linearization: rotations by up to phi
+        second = (phi**2) * r_c + phi * eps_d
         d_th = d_th * (1 + phi) + phi**2
-        dq = dq * (1 + phi) + (phi**2) * r_c + phi * eps_d
-        eps_t0 = 2 * (dq + r_c * d_th)
-        d_t = dq + np.hypot(*stable.centroid) * d_th
+        eps_t0 = 2 * (moved[:, 1:].max(axis=1) * (1 + phi) + second)
+        d_t = moved[:, 0] * (1 + phi) + second
 
     # rank-1 families: feasible slide interval (each contact on its finite face), sampled
     R = rotation_matrices(fit.theta)

@@ -149,10 +149,13 @@ def fit_batch(
         n_ref[:, None, 0] * face_normals[..., 1] - n_ref[:, None, 1] * face_normals[..., 0]
     )
     rank2 = np.any(assigned & (cross > 1e-6), axis=1)
-    # rank 1: pin e·b = 0 with e the face direction (model frame)
+    # rank 1: pin the first contact's model coordinate along the faces, e·(R^T p_1 + b) = 0,
+    # with e the face direction (model frame): samples then slide the object along the faces
     e = n_ref @ _J.T
-    pin = np.concatenate([np.zeros((K, 2)), e], axis=1)
-    info = info + (~rank2)[:, None, None] * np.einsum("ki,kj->kij", pin, pin) / sigma_d**2
+    anchor = points[first]  # (K, 2)
+    pin, _ = lifted_rows(anchor, anchor, e, np.zeros(K))
+    pin = pin[:, 0, :] * (~rank2)[:, None]  # the line-row form with n -> e
+    info = info + np.einsum("ki,kj->kij", pin, pin) / sigma_d**2
 
     info_inv = np.linalg.inv(info)
     z = np.einsum("kij,kj->ki", info_inv, vec)
@@ -177,6 +180,10 @@ def fit_batch(
     # first order: dz = -info^-1 H^T W E dm  (residual terms are second order)
     E = _row_derivatives(z[:, None, :], normals[None], face_normals)  # (K, s, 3, 3)
     dz = -np.einsum("kij,ksrj,ksr,ksrm->ksim", info_inv, H, W, E)
+    # the pin's anchor is the first contact's measured point: its error moves the pin too
+    e_pin = _row_derivatives(z, normals[first], e)[:, 0, :2]  # (K, 2): d(pin·z)/d p_1
+    dz_pin = -np.einsum("kij,kj,km->kim", info_inv, pin, e_pin) / sigma_d**2
+    dz[np.arange(K), first, :, :2] += dz_pin
     sens_origin = np.einsum("kij,ksjm->ksim", G, dz)  # (K, s, 3, 3)
     # q = R ref + t: dq = dt + R J ref dtheta
     arm = np.einsum("kij,jl,kl->ki", R, _J, reference)
@@ -223,6 +230,31 @@ def worst_case_bounds(
     dq = eps_d * pos_norm + phi * np.hypot(sens[..., 0, 2], sens[..., 1, 2])
     dth = eps_d * np.hypot(sens[..., 2, 0], sens[..., 2, 1]) + phi * np.abs(sens[..., 2, 2])
     return (dq * assigned).sum(axis=1), (dth * assigned).sum(axis=1)
+
+
+def _op_norm_2x2(a: np.ndarray) -> np.ndarray:
+    """Spectral norm of 2x2 blocks (..., 2, 2) in closed form."""
+    fro2 = np.sum(a * a, axis=(-2, -1))
+    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
+    return np.sqrt(0.5 * (fro2 + np.sqrt(np.maximum(fro2 * fro2 - 4 * det * det, 0.0))))
+
+
+def point_bounds(
+    fit: FitBatch, points: np.ndarray, assigned: np.ndarray, eps_d: float, phi: float
+) -> np.ndarray:
+    """Worst-case first-order displacement (K, P) of model `points` (P, 2) in the world.
+
+    A model point v lands at ``R v + t``; its displacement under measurement errors is
+    ``S_v = S_t + (R J v) S_theta`` per contact, and the worst case adds
+    ``eps_d ||S_v[:, :2]|| + phi |S_v[:, 2]|`` over the contacts. Being affine in v,
+    the displacement bound over a polygon is largest at a vertex.
+    """
+    R = rotation_matrices(fit.theta)
+    arm = np.einsum("kij,jl,pl->kpi", R, _J, points)  # (K, P, 2)
+    s_theta = fit.sens[:, :, 2, :]  # (K, s, 3)
+    s_v = fit.sens_origin[:, :, None] + arm[:, None, :, :, None] * s_theta[:, :, None, None, :]
+    each = eps_d * _op_norm_2x2(s_v[..., :2]) + phi * np.hypot(s_v[..., 0, 2], s_v[..., 1, 2])
+    return np.einsum("ksp,ks->kp", each, assigned.astype(float))
 
 
 class PoseFilter:
