@@ -164,6 +164,9 @@ class Candidates:
     weight: np.ndarray  # unnormalized posterior weight
 
 
+_TURN = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90 degrees
+
+
 def _no_candidates(group_index: int) -> Candidates:
     none = np.zeros(0)
     return Candidates(
@@ -243,31 +246,34 @@ def evaluate(
     ref = np.broadcast_to(stable.centroid, (len(rows), 2))
     fit = fit_batch(P, U, faces.normal[face], faces.offset[face], assigned, ref, sigma_d, sigma_phi)
     r_c = stable.centroid_radius
-    if config.bound_mode == "thesis":
-        eps_t0 = np.full(len(rows), config.thesis_fraction * 2 * r_c)
-        d_th = eps_t0 / (2 * r_c)
-        d_t = eps_t0 / 2 + np.hypot(*stable.centroid) * d_th
-    else:
+    # rank-1 families slide along e (model frame): t(s) = t0 + s slide, so a model point v
+    # of the sample at s sits where the point v - s e / rho sits at s = 0
+    R = rotation_matrices(fit.theta)
+    rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
+    e = faces.normal[face[np.arange(len(rows)), np.argmax(assigned, 1)]] @ _TURN.T
+    m0 = np.einsum("kji,ksj->ksi", R, P[None] - fit.t[:, None, :])  # contacts' model points
+    origin_and_outline = np.vstack([[0.0, 0.0], stable.outline])
+    linearized = config.bound_mode != "thesis"
+    if linearized:
         _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
-        # first-order worst case at the model origin and at every outline vertex
-        moved = point_bounds(fit, np.vstack([[0.0, 0.0], stable.outline]), assigned, eps_d, phi)
         # second-order allowance for the linearization: rotations by up to phi
         second = (phi**2) * r_c + phi * eps_d
         d_th = d_th * (1 + phi) + phi**2
-        eps_t0 = 2 * (moved[:, 1:].max(axis=1) * (1 + phi) + second)
-        d_t = moved[:, 0] * (1 + phi) + second
+        # first-order worst case at every outline vertex (at s = 0: for the sample spacing)
+        moved = point_bounds(fit, stable.outline, assigned, eps_d, phi)
+        eps_t0 = 2 * (moved.max(axis=1) * (1 + phi) + second)
+        # a contact's own model point moves by at most this: its slide margin
+        at_contact = point_bounds(fit, m0, assigned, eps_d, phi)
+        margin = eps_d + at_contact * (1 + phi) + second + slack
+    else:
+        eps_t0 = np.full(len(rows), config.thesis_fraction * 2 * r_c)
+        d_th = eps_t0 / (2 * r_c)
+        margin = np.broadcast_to((eps_d + eps_t0 / 2 + slack)[:, None], assigned.shape)
 
     # rank-1 families: feasible slide interval (each contact on its finite face), sampled
-    R = rotation_matrices(fit.theta)
-    m0 = np.einsum("kji,ksj->ksi", R, P[None] - fit.t[:, None, :])  # model points at s = 0
     fdir = faces.direction[face]
     mu0 = np.einsum("ksi,ksi->ks", m0 - faces.start[face], fdir)
-    rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
-    e = faces.normal[face[np.arange(len(rows)), np.argmax(assigned, 1)]] @ np.array(
-        [[0, 1], [-1, 0]]
-    )
     rate = np.einsum("ki,ksi->ks", e, fdir) / rho[:, None]  # d mu / d s (= ±1/rho)
-    margin = eps_d + eps_t0[:, None] / 2 + slack
     lo_mu, hi_mu = -margin, faces.length[face] + margin
     with np.errstate(divide="ignore", invalid="ignore"):
         s_a, s_b = (lo_mu - mu0) / rate, (hi_mu - mu0) / rate
@@ -299,8 +305,14 @@ def evaluate(
     s_val = np.where(family[src], s_lo[src] + (offset + 0.5) * cell[src], 0.0)
     theta = fit.theta[src]
     t = fit.t[src] + s_val[:, None] * fit.slide[src]
-    eps_t = eps_t0[src] + cell[src]
-    d_translation = d_t[src] + cell[src] / 2
+    if linearized:
+        shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
+        moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
+        eps_t = 2 * (moved[:, 1:].max(axis=1) * (1 + phi) + second) + cell[src]
+        d_translation = moved[:, 0] * (1 + phi) + second + cell[src] / 2
+    else:
+        eps_t = eps_t0[src] + cell[src]
+        d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
     d_theta = d_th[src]
     ok = np.ones(len(src), dtype=bool)
 

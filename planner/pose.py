@@ -240,21 +240,33 @@ def _op_norm_2x2(a: np.ndarray) -> np.ndarray:
 
 
 def point_bounds(
-    fit: FitBatch, points: np.ndarray, assigned: np.ndarray, eps_d: float, phi: float
+    fit: FitBatch,
+    points: np.ndarray,
+    assigned: np.ndarray,
+    eps_d: float,
+    phi: float,
+    rows: np.ndarray | None = None,
 ) -> np.ndarray:
-    """Worst-case first-order displacement (K, P) of model `points` (P, 2) in the world.
+    """Worst-case first-order displacement (N, P) of model `points` in the world.
+
+    `points` is (P, 2) for every fit or (N, P, 2) per fit; `rows` (N,) picks the fits
+    (default: all K, in order).
 
     A model point v lands at ``R v + t``; its displacement under measurement errors is
     ``S_v = S_t + (R J v) S_theta`` per contact, and the worst case adds
     ``eps_d ||S_v[:, :2]|| + phi |S_v[:, 2]|`` over the contacts. Being affine in v,
     the displacement bound over a polygon is largest at a vertex.
     """
-    R = rotation_matrices(fit.theta)
-    arm = np.einsum("kij,jl,pl->kpi", R, _J, points)  # (K, P, 2)
-    s_theta = fit.sens[:, :, 2, :]  # (K, s, 3)
-    s_v = fit.sens_origin[:, :, None] + arm[:, None, :, :, None] * s_theta[:, :, None, None, :]
+    rows = np.arange(len(fit.theta)) if rows is None else rows
+    R = rotation_matrices(fit.theta[rows])
+    points = np.broadcast_to(points, (len(rows), *points.shape[-2:]))
+    arm = np.einsum("kij,jl,kpl->kpi", R, _J, points)  # (N, P, 2)
+    s_theta = fit.sens[rows, :, 2, :]  # (N, s, 3)
+    s_v = fit.sens_origin[rows][:, :, None] + (
+        arm[:, None, :, :, None] * s_theta[:, :, None, None, :]
+    )
     each = eps_d * _op_norm_2x2(s_v[..., :2]) + phi * np.hypot(s_v[..., 0, 2], s_v[..., 1, 2])
-    return np.einsum("ksp,ks->kp", each, assigned.astype(float))
+    return np.einsum("ksp,ks->kp", each, assigned[rows].astype(float))
 
 
 class PoseFilter:
