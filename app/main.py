@@ -25,7 +25,7 @@ from app.observability import (
     configure_logging,
     install_metrics,
 )
-from app.routes import health, objects, observations, pictures, plan, sessions
+from app.routes import health, objects, observations, pictures, plan, sessions, viewer
 from app.schemas import input_models
 from app.service import SessionService
 from app.settings import Settings
@@ -108,7 +108,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.service = None
     install_error_handlers(app)
     inputs = input_models(settings)
-    for module in (objects, sessions, observations, plan, pictures, health):
+    for module in (objects, sessions, observations, plan, pictures, viewer, health):
         app.include_router(module.build_router(inputs, settings))
     install_metrics(app)
     app.add_middleware(BodyLimitMiddleware, max_body_bytes=settings.max_body_bytes)

@@ -16,6 +16,7 @@ and decides where work runs:
 
 from __future__ import annotations
 
+import json
 import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
@@ -422,6 +423,21 @@ class SessionService:
                 self.pictures.put(key, image)
         media = "image/svg+xml" if kind == "svg" else "image/png"
         return Answer(200, image, {"ETag": etag(record.version), "Content-Type": media})
+
+    async def image_json(self, session_id: str) -> Answer:
+        """The MII's world geometry as JSON (cached per version), for the live viewer."""
+        from app.viewer import mii_json
+
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            key = (session_id, record.version, "json")
+            body = self.pictures.get(key)
+            if body is None:
+                session = await self._session(record)
+                data = await self.run_cpu(mii_json, session, record.config["sensor_position"])
+                body = json.dumps(data).encode()
+                self.pictures.put(key, body)
+        return Answer(200, body, {"ETag": etag(record.version)})
 
     def _draw(
         self, session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
