@@ -1,0 +1,257 @@
+from http import HTTPStatus
+from typing import Any, cast
+from urllib.parse import quote
+
+import httpx
+
+from ...client import AuthenticatedClient, Client
+from ...types import Response, UNSET
+from ... import errors
+
+from ...models.get_image_svg_view import GetImageSvgView
+from ...models.problem import Problem
+from ...types import UNSET, Unset
+from typing import cast
+from uuid import UUID
+
+
+
+def _get_kwargs(
+    session_id: UUID,
+    *,
+    view: GetImageSvgView | Unset = GetImageSvgView.VECTOR,
+
+) -> dict[str, Any]:
+    
+
+    
+
+    params: dict[str, Any] = {}
+
+    json_view: str | Unset = UNSET
+    if not isinstance(view, Unset):
+        json_view = view.value
+
+    params["view"] = json_view
+
+
+    params = {k: v for k, v in params.items() if v is not UNSET and v is not None}
+
+
+    _kwargs: dict[str, Any] = {
+        "method": "get",
+        "url": "/v1/sessions/{session_id}/image.svg".format(session_id=quote(str(session_id), safe=""),),
+        "params": params,
+    }
+
+
+    return _kwargs
+
+
+
+def _parse_response(*, client: AuthenticatedClient | Client, response: httpx.Response) -> Problem | None:
+    if response.status_code == 400:
+        response_400 = Problem.from_dict(response.json())
+
+
+
+        return response_400
+
+    if response.status_code == 401:
+        response_401 = Problem.from_dict(response.json())
+
+
+
+        return response_401
+
+    if response.status_code == 404:
+        response_404 = Problem.from_dict(response.json())
+
+
+
+        return response_404
+
+    if response.status_code == 409:
+        response_409 = Problem.from_dict(response.json())
+
+
+
+        return response_409
+
+    if response.status_code == 412:
+        response_412 = Problem.from_dict(response.json())
+
+
+
+        return response_412
+
+    if response.status_code == 413:
+        response_413 = Problem.from_dict(response.json())
+
+
+
+        return response_413
+
+    if response.status_code == 422:
+        response_422 = Problem.from_dict(response.json())
+
+
+
+        return response_422
+
+    if client.raise_on_unexpected_status:
+        raise errors.UnexpectedStatus(response.status_code, response.content)
+    else:
+        return None
+
+
+def _build_response(*, client: AuthenticatedClient | Client, response: httpx.Response) -> Response[Problem]:
+    return Response(
+        status_code=HTTPStatus(response.status_code),
+        content=response.content,
+        headers=response.headers,
+        parsed=_parse_response(client=client, response=response),
+    )
+
+
+def sync_detailed(
+    session_id: UUID,
+    *,
+    client: AuthenticatedClient | Client,
+    view: GetImageSvgView | Unset = GetImageSvgView.VECTOR,
+
+) -> Response[Problem]:
+    """ Get Image Svg
+
+     The MII: posed outlines, IA, blocking boundaries shaded by strength, contacts with
+    normals, ranked paths. 409 while there is no hypothesis to draw.
+
+    Args:
+        session_id (UUID): session id (a random UUID)
+        view (GetImageSvgView | Unset): vector MII, grid MII, or both Default:
+            GetImageSvgView.VECTOR.
+
+    Raises:
+        errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
+        httpx.TimeoutException: If the request takes longer than Client.timeout.
+
+    Returns:
+        Response[Problem]
+     """
+
+
+    kwargs = _get_kwargs(
+        session_id=session_id,
+view=view,
+
+    )
+
+    response = client.get_httpx_client().request(
+        **kwargs,
+    )
+
+    return _build_response(client=client, response=response)
+
+def sync(
+    session_id: UUID,
+    *,
+    client: AuthenticatedClient | Client,
+    view: GetImageSvgView | Unset = GetImageSvgView.VECTOR,
+
+) -> Problem | None:
+    """ Get Image Svg
+
+     The MII: posed outlines, IA, blocking boundaries shaded by strength, contacts with
+    normals, ranked paths. 409 while there is no hypothesis to draw.
+
+    Args:
+        session_id (UUID): session id (a random UUID)
+        view (GetImageSvgView | Unset): vector MII, grid MII, or both Default:
+            GetImageSvgView.VECTOR.
+
+    Raises:
+        errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
+        httpx.TimeoutException: If the request takes longer than Client.timeout.
+
+    Returns:
+        Problem
+     """
+
+
+    return sync_detailed(
+        session_id=session_id,
+client=client,
+view=view,
+
+    ).parsed
+
+async def asyncio_detailed(
+    session_id: UUID,
+    *,
+    client: AuthenticatedClient | Client,
+    view: GetImageSvgView | Unset = GetImageSvgView.VECTOR,
+
+) -> Response[Problem]:
+    """ Get Image Svg
+
+     The MII: posed outlines, IA, blocking boundaries shaded by strength, contacts with
+    normals, ranked paths. 409 while there is no hypothesis to draw.
+
+    Args:
+        session_id (UUID): session id (a random UUID)
+        view (GetImageSvgView | Unset): vector MII, grid MII, or both Default:
+            GetImageSvgView.VECTOR.
+
+    Raises:
+        errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
+        httpx.TimeoutException: If the request takes longer than Client.timeout.
+
+    Returns:
+        Response[Problem]
+     """
+
+
+    kwargs = _get_kwargs(
+        session_id=session_id,
+view=view,
+
+    )
+
+    response = await client.get_async_httpx_client().request(
+        **kwargs
+    )
+
+    return _build_response(client=client, response=response)
+
+async def asyncio(
+    session_id: UUID,
+    *,
+    client: AuthenticatedClient | Client,
+    view: GetImageSvgView | Unset = GetImageSvgView.VECTOR,
+
+) -> Problem | None:
+    """ Get Image Svg
+
+     The MII: posed outlines, IA, blocking boundaries shaded by strength, contacts with
+    normals, ranked paths. 409 while there is no hypothesis to draw.
+
+    Args:
+        session_id (UUID): session id (a random UUID)
+        view (GetImageSvgView | Unset): vector MII, grid MII, or both Default:
+            GetImageSvgView.VECTOR.
+
+    Raises:
+        errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
+        httpx.TimeoutException: If the request takes longer than Client.timeout.
+
+    Returns:
+        Problem
+     """
+
+
+    return (await asyncio_detailed(
+        session_id=session_id,
+client=client,
+view=view,
+
+    )).parsed

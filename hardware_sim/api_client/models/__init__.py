@@ -1,0 +1,71 @@
+""" Contains all the data models used in inputs/outputs """
+
+from .contact_in import ContactIn
+from .contact_out import ContactOut
+from .error_bound_out import ErrorBoundOut
+from .field_error import FieldError
+from .get_image_png_view import GetImagePngView
+from .get_image_svg_view import GetImageSvgView
+from .health import Health
+from .hypothesis_out import HypothesisOut
+from .object_created import ObjectCreated
+from .object_in import ObjectIn
+from .object_list import ObjectList
+from .object_out import ObjectOut
+from .observation_in import ObservationIn
+from .observation_out import ObservationOut
+from .path_in import PathIn
+from .path_out import PathOut
+from .plan_out import PlanOut
+from .plan_out_status import PlanOutStatus
+from .planned_path_out import PlannedPathOut
+from .pose_out import PoseOut
+from .problem import Problem
+from .sensor_in import SensorIn
+from .sensor_out import SensorOut
+from .session_create import SessionCreate
+from .session_out import SessionOut
+from .session_out_status import SessionOutStatus
+from .stable_pose_in import StablePoseIn
+from .stable_pose_out import StablePoseOut
+from .strategy_in import StrategyIn
+from .strategy_in_name import StrategyInName
+from .strategy_out import StrategyOut
+from .workspace_in import WorkspaceIn
+from .workspace_out import WorkspaceOut
+
+__all__ = (
+    "ContactIn",
+    "ContactOut",
+    "ErrorBoundOut",
+    "FieldError",
+    "GetImagePngView",
+    "GetImageSvgView",
+    "Health",
+    "HypothesisOut",
+    "ObjectCreated",
+    "ObjectIn",
+    "ObjectList",
+    "ObjectOut",
+    "ObservationIn",
+    "ObservationOut",
+    "PathIn",
+    "PathOut",
+    "PlannedPathOut",
+    "PlanOut",
+    "PlanOutStatus",
+    "PoseOut",
+    "Problem",
+    "SensorIn",
+    "SensorOut",
+    "SessionCreate",
+    "SessionOut",
+    "SessionOutStatus",
+    "StablePoseIn",
+    "StablePoseOut",
+    "StrategyIn",
+    "StrategyInName",
+    "StrategyOut",
+    "WorkspaceIn",
+    "WorkspaceOut",
+)

@@ -1,0 +1,93 @@
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeVar, BinaryIO, TextIO, TYPE_CHECKING, Generator
+
+from attrs import define as _attrs_define
+from attrs import field as _attrs_field
+
+from ..types import UNSET, Unset
+
+
+
+
+
+
+
+T = TypeVar("T", bound="ErrorBoundOut")
+
+
+
+@_attrs_define
+class ErrorBoundOut:
+    """ |dt| of the translation, |dtheta| (radians) and the error disk diameter eps_t.
+
+        Attributes:
+            eps_t (float):
+            rotation (float):
+            translation (float):
+     """
+
+    eps_t: float
+    rotation: float
+    translation: float
+    additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
+
+
+
+
+
+    def to_dict(self) -> dict[str, Any]:
+        eps_t = self.eps_t
+
+        rotation = self.rotation
+
+        translation = self.translation
+
+
+        field_dict: dict[str, Any] = {}
+        field_dict.update(self.additional_properties)
+        field_dict.update({
+            "eps_t": eps_t,
+            "rotation": rotation,
+            "translation": translation,
+        })
+
+        return field_dict
+
+
+
+    @classmethod
+    def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        d = dict(src_dict)
+        eps_t = d.pop("eps_t")
+
+        rotation = d.pop("rotation")
+
+        translation = d.pop("translation")
+
+        error_bound_out = cls(
+            eps_t=eps_t,
+            rotation=rotation,
+            translation=translation,
+        )
+
+
+        error_bound_out.additional_properties = d
+        return error_bound_out
+
+    @property
+    def additional_keys(self) -> list[str]:
+        return list(self.additional_properties.keys())
+
+    def __getitem__(self, key: str) -> Any:
+        return self.additional_properties[key]
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self.additional_properties[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        del self.additional_properties[key]
+
+    def __contains__(self, key: str) -> bool:
+        return key in self.additional_properties

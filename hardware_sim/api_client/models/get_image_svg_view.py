@@ -1,0 +1,9 @@
+from enum import StrEnum
+
+class GetImageSvgView(StrEnum):
+    BOTH = "both"
+    GRID = "grid"
+    VECTOR = "vector"
+
+    def __str__(self) -> str:
+        return str(self.value)

@@ -1,0 +1,194 @@
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeVar, BinaryIO, TextIO, TYPE_CHECKING, Generator
+
+from attrs import define as _attrs_define
+from attrs import field as _attrs_field
+
+from ..types import UNSET, Unset
+
+from ..types import UNSET, Unset
+from typing import cast
+
+
+
+
+
+
+T = TypeVar("T", bound="PlannedPathOut")
+
+
+
+@_attrs_define
+class PlannedPathOut:
+    """ 
+        Attributes:
+            aim (list[float]):
+            direction (list[float]):
+            expected_pruning (float):
+            expected_remaining (float | None): expected touches still needed when taking this path (itself included)
+            family (str): distinguishing, informative, partial, uninformative, ...
+            length (float):
+            motion_cost (float | None):
+            origin (list[float]):
+            p_distinguishing (float):
+            p_informative (float):
+            source (None | str | Unset):
+     """
+
+    aim: list[float]
+    direction: list[float]
+    expected_pruning: float
+    expected_remaining: float | None
+    family: str
+    length: float
+    motion_cost: float | None
+    origin: list[float]
+    p_distinguishing: float
+    p_informative: float
+    source: None | str | Unset = UNSET
+    additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
+
+
+
+
+
+    def to_dict(self) -> dict[str, Any]:
+        aim = self.aim
+
+
+
+        direction = self.direction
+
+
+
+        expected_pruning = self.expected_pruning
+
+        expected_remaining: float | None
+        expected_remaining = self.expected_remaining
+
+        family = self.family
+
+        length = self.length
+
+        motion_cost: float | None
+        motion_cost = self.motion_cost
+
+        origin = self.origin
+
+
+
+        p_distinguishing = self.p_distinguishing
+
+        p_informative = self.p_informative
+
+        source: None | str | Unset
+        if isinstance(self.source, Unset):
+            source = UNSET
+        else:
+            source = self.source
+
+
+        field_dict: dict[str, Any] = {}
+        field_dict.update(self.additional_properties)
+        field_dict.update({
+            "aim": aim,
+            "direction": direction,
+            "expected_pruning": expected_pruning,
+            "expected_remaining": expected_remaining,
+            "family": family,
+            "length": length,
+            "motion_cost": motion_cost,
+            "origin": origin,
+            "p_distinguishing": p_distinguishing,
+            "p_informative": p_informative,
+        })
+        if source is not UNSET:
+            field_dict["source"] = source
+
+        return field_dict
+
+
+
+    @classmethod
+    def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        d = dict(src_dict)
+        aim = cast(list[float], d.pop("aim"))
+
+
+        direction = cast(list[float], d.pop("direction"))
+
+
+        expected_pruning = d.pop("expected_pruning")
+
+        def _parse_expected_remaining(data: object) -> float | None:
+            if data is None:
+                return data
+            return cast(float | None, data)
+
+        expected_remaining = _parse_expected_remaining(d.pop("expected_remaining"))
+
+
+        family = d.pop("family")
+
+        length = d.pop("length")
+
+        def _parse_motion_cost(data: object) -> float | None:
+            if data is None:
+                return data
+            return cast(float | None, data)
+
+        motion_cost = _parse_motion_cost(d.pop("motion_cost"))
+
+
+        origin = cast(list[float], d.pop("origin"))
+
+
+        p_distinguishing = d.pop("p_distinguishing")
+
+        p_informative = d.pop("p_informative")
+
+        def _parse_source(data: object) -> None | str | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(None | str | Unset, data)
+
+        source = _parse_source(d.pop("source", UNSET))
+
+
+        planned_path_out = cls(
+            aim=aim,
+            direction=direction,
+            expected_pruning=expected_pruning,
+            expected_remaining=expected_remaining,
+            family=family,
+            length=length,
+            motion_cost=motion_cost,
+            origin=origin,
+            p_distinguishing=p_distinguishing,
+            p_informative=p_informative,
+            source=source,
+        )
+
+
+        planned_path_out.additional_properties = d
+        return planned_path_out
+
+    @property
+    def additional_keys(self) -> list[str]:
+        return list(self.additional_properties.keys())
+
+    def __getitem__(self, key: str) -> Any:
+        return self.additional_properties[key]
+
+    def __setitem__(self, key: str, value: Any) -> None:
+        self.additional_properties[key] = value
+
+    def __delitem__(self, key: str) -> None:
+        del self.additional_properties[key]
+
+    def __contains__(self, key: str) -> bool:
+        return key in self.additional_properties

@@ -1,0 +1,202 @@
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeVar, BinaryIO, TextIO, TYPE_CHECKING, Generator
+
+from attrs import define as _attrs_define
+from attrs import field as _attrs_field
+
+from ..types import UNSET, Unset
+
+from ..types import UNSET, Unset
+from typing import cast
+
+if TYPE_CHECKING:
+  from ..models.object_in import ObjectIn
+  from ..models.sensor_in import SensorIn
+  from ..models.strategy_in import StrategyIn
+  from ..models.workspace_in import WorkspaceIn
+
+
+
+
+
+T = TypeVar("T", bound="SessionCreate")
+
+
+
+@_attrs_define
+class SessionCreate:
+    """ A new session: its object set (registered names or inline §8 objects), sensor
+    bounds, safe circle, the sensor's place on it, strategy and allowed outliers.
+
+        Attributes:
+            objects (list[ObjectIn | str]):
+            max_outliers (int | Unset):  Default: 0.
+            sensor (SensorIn | Unset): Bounded sensor errors: contact position (length) and normal angle (radians).
+            sensor_position (list[float] | None | Unset): default: the point of the safe circle on its +x axis
+            strategy (StrategyIn | Unset):
+            workspace (WorkspaceIn | Unset): The safe circle: known to contain the object; paths start on it.
+     """
+
+    objects: list[ObjectIn | str]
+    max_outliers: int | Unset = 0
+    sensor: SensorIn | Unset = UNSET
+    sensor_position: list[float] | None | Unset = UNSET
+    strategy: StrategyIn | Unset = UNSET
+    workspace: WorkspaceIn | Unset = UNSET
+
+
+
+
+
+    def to_dict(self) -> dict[str, Any]:
+        from ..models.object_in import ObjectIn # noqa: PLC0415
+        from ..models.sensor_in import SensorIn # noqa: PLC0415
+        from ..models.strategy_in import StrategyIn # noqa: PLC0415
+        from ..models.workspace_in import WorkspaceIn # noqa: PLC0415
+        objects = []
+        for objects_item_data in self.objects:
+            objects_item: dict[str, Any] | str
+            if isinstance(objects_item_data, ObjectIn):
+                objects_item = objects_item_data.to_dict()
+            else:
+                objects_item = objects_item_data
+            objects.append(objects_item)
+
+
+
+        max_outliers = self.max_outliers
+
+        sensor: dict[str, Any] | Unset = UNSET
+        if not isinstance(self.sensor, Unset):
+            sensor = self.sensor.to_dict()
+
+        sensor_position: list[float] | None | Unset
+        if isinstance(self.sensor_position, Unset):
+            sensor_position = UNSET
+        elif isinstance(self.sensor_position, list):
+            sensor_position = self.sensor_position
+
+
+        else:
+            sensor_position = self.sensor_position
+
+        strategy: dict[str, Any] | Unset = UNSET
+        if not isinstance(self.strategy, Unset):
+            strategy = self.strategy.to_dict()
+
+        workspace: dict[str, Any] | Unset = UNSET
+        if not isinstance(self.workspace, Unset):
+            workspace = self.workspace.to_dict()
+
+
+        field_dict: dict[str, Any] = {}
+
+        field_dict.update({
+            "objects": objects,
+        })
+        if max_outliers is not UNSET:
+            field_dict["max_outliers"] = max_outliers
+        if sensor is not UNSET:
+            field_dict["sensor"] = sensor
+        if sensor_position is not UNSET:
+            field_dict["sensor_position"] = sensor_position
+        if strategy is not UNSET:
+            field_dict["strategy"] = strategy
+        if workspace is not UNSET:
+            field_dict["workspace"] = workspace
+
+        return field_dict
+
+
+
+    @classmethod
+    def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        from ..models.object_in import ObjectIn # noqa: PLC0415
+        from ..models.sensor_in import SensorIn # noqa: PLC0415
+        from ..models.strategy_in import StrategyIn # noqa: PLC0415
+        from ..models.workspace_in import WorkspaceIn # noqa: PLC0415
+        d = dict(src_dict)
+        objects = []
+        _objects = d.pop("objects")
+        for objects_item_data in (_objects):
+            def _parse_objects_item(data: object) -> ObjectIn | str:
+                try:
+                    if not isinstance(data, dict):
+                        raise TypeError()
+                    objects_item_type_1 = ObjectIn.from_dict(data)
+
+
+
+                    return objects_item_type_1
+                except (TypeError, ValueError, AttributeError, KeyError):
+                    pass
+                return cast(ObjectIn | str, data)
+
+            objects_item = _parse_objects_item(objects_item_data)
+
+            objects.append(objects_item)
+
+
+        max_outliers = d.pop("max_outliers", UNSET)
+
+        _sensor = d.pop("sensor", UNSET)
+        sensor: SensorIn | Unset
+        if isinstance(_sensor,  Unset):
+            sensor = UNSET
+        else:
+            sensor = SensorIn.from_dict(_sensor)
+
+
+
+
+        def _parse_sensor_position(data: object) -> list[float] | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, list):
+                    raise TypeError()
+                sensor_position_type_0 = cast(list[float], data)
+
+                return sensor_position_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(list[float] | None | Unset, data)
+
+        sensor_position = _parse_sensor_position(d.pop("sensor_position", UNSET))
+
+
+        _strategy = d.pop("strategy", UNSET)
+        strategy: StrategyIn | Unset
+        if isinstance(_strategy,  Unset):
+            strategy = UNSET
+        else:
+            strategy = StrategyIn.from_dict(_strategy)
+
+
+
+
+        _workspace = d.pop("workspace", UNSET)
+        workspace: WorkspaceIn | Unset
+        if isinstance(_workspace,  Unset):
+            workspace = UNSET
+        else:
+            workspace = WorkspaceIn.from_dict(_workspace)
+
+
+
+
+        session_create = cls(
+            objects=objects,
+            max_outliers=max_outliers,
+            sensor=sensor,
+            sensor_position=sensor_position,
+            strategy=strategy,
+            workspace=workspace,
+        )
+
+        return session_create
+

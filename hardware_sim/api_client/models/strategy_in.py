@@ -1,0 +1,117 @@
+from __future__ import annotations
+
+from collections.abc import Mapping
+from typing import Any, TypeVar, BinaryIO, TextIO, TYPE_CHECKING, Generator
+
+from attrs import define as _attrs_define
+from attrs import field as _attrs_field
+
+from ..types import UNSET, Unset
+
+from ..models.strategy_in_name import StrategyInName
+from ..types import UNSET, Unset
+
+
+
+
+
+
+T = TypeVar("T", bound="StrategyIn")
+
+
+
+@_attrs_define
+class StrategyIn:
+    """ 
+        Attributes:
+            budget_ms (float | Unset):  Default: 500.0.
+            depth (int | Unset):  Default: 2.
+            grid_size (int | Unset):  Default: 70.
+            max_paths (int | Unset):  Default: 5.
+            motion_weight (float | Unset):  Default: 0.0.
+            name (StrategyInName | Unset):  Default: StrategyInName.LOOKAHEAD.
+     """
+
+    budget_ms: float | Unset = 500.0
+    depth: int | Unset = 2
+    grid_size: int | Unset = 70
+    max_paths: int | Unset = 5
+    motion_weight: float | Unset = 0.0
+    name: StrategyInName | Unset = StrategyInName.LOOKAHEAD
+
+
+
+
+
+    def to_dict(self) -> dict[str, Any]:
+        budget_ms = self.budget_ms
+
+        depth = self.depth
+
+        grid_size = self.grid_size
+
+        max_paths = self.max_paths
+
+        motion_weight = self.motion_weight
+
+        name: str | Unset = UNSET
+        if not isinstance(self.name, Unset):
+            name = self.name.value
+
+
+
+        field_dict: dict[str, Any] = {}
+
+        field_dict.update({
+        })
+        if budget_ms is not UNSET:
+            field_dict["budget_ms"] = budget_ms
+        if depth is not UNSET:
+            field_dict["depth"] = depth
+        if grid_size is not UNSET:
+            field_dict["grid_size"] = grid_size
+        if max_paths is not UNSET:
+            field_dict["max_paths"] = max_paths
+        if motion_weight is not UNSET:
+            field_dict["motion_weight"] = motion_weight
+        if name is not UNSET:
+            field_dict["name"] = name
+
+        return field_dict
+
+
+
+    @classmethod
+    def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        d = dict(src_dict)
+        budget_ms = d.pop("budget_ms", UNSET)
+
+        depth = d.pop("depth", UNSET)
+
+        grid_size = d.pop("grid_size", UNSET)
+
+        max_paths = d.pop("max_paths", UNSET)
+
+        motion_weight = d.pop("motion_weight", UNSET)
+
+        _name = d.pop("name", UNSET)
+        name: StrategyInName | Unset
+        if isinstance(_name,  Unset):
+            name = UNSET
+        else:
+            name = StrategyInName(_name)
+
+
+
+
+        strategy_in = cls(
+            budget_ms=budget_ms,
+            depth=depth,
+            grid_size=grid_size,
+            max_paths=max_paths,
+            motion_weight=motion_weight,
+            name=name,
+        )
+
+        return strategy_in
+
