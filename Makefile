@@ -3,7 +3,7 @@ PYTHON ?= python3
 VENV := .venv
 BIN := $(VENV)/bin
 
-.PHONY: demo test lint venv dev-venv clean client
+.PHONY: demo test lint venv dev-venv clean client loadtest
 
 $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
@@ -35,6 +35,10 @@ test: lint
 # Regenerate the committed HTTP client from the service's OpenAPI schema.
 client: $(VENV)/.installed-dev
 	$(BIN)/python -m app.schema
+
+# A real `tactile serve` at 1 and 2 workers under a bounded locust fleet of robots.
+loadtest: $(VENV)/.installed-dev
+	$(BIN)/python -m hardware_sim.loadtest --workers 1 2 --users 8 --seconds 30
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache .hypothesis
