@@ -69,8 +69,10 @@ def _problem_media_types(schema: dict[str, Any]) -> dict[str, Any]:
         for operation in item.values():
             for status, response in operation.get("responses", {}).items():
                 content = response.get("content", {})
-                if status[:1] in "45" and "application/json" in content:
-                    content[PROBLEM_MEDIA_TYPE] = content.pop("application/json")
+                if status[:1] in "45" and content and PROBLEM_MEDIA_TYPE not in content:
+                    # whatever the route's own media type, errors are problem details
+                    first = content.get("application/json") or next(iter(content.values()))
+                    response["content"] = {PROBLEM_MEDIA_TYPE: first}
     return schema
 
 

@@ -175,6 +175,16 @@ class SessionService:
         created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
         return created, model.name
 
+    async def import_mesh(
+        self, data: bytes, file_type: str, height: float, name: str, max_poses: int | None
+    ) -> tuple[bool, str]:
+        """Register the object model of an uploaded triangle mesh."""
+        from planner.mesh import import_mesh_bytes
+
+        model = await self.run_cpu(import_mesh_bytes, data, file_type, height, name, max_poses)
+        created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
+        return created, model.name
+
     # -- sessions ---------------------------------------------------------------------------
     async def _models(self, refs: Sequence[str | dict[str, Any]]) -> list[ObjectModel]:
         names = [r for r in refs if isinstance(r, str)]

@@ -1,11 +1,11 @@
 """Objects (§8 format): register, list, fetch. Model coordinates are kept as given."""
 
-from typing import Annotated
+from typing import Annotated, Literal
 
-from fastapi import APIRouter, Path, Query, Response
+from fastapi import APIRouter, Path, Query, Request, Response
 
 from app.deps import ServiceDep, auth_dependencies
-from app.errors import ConflictError, NotFoundError
+from app.errors import ConflictError, InvalidInputError, NotFoundError
 from app.routes import PROBLEMS
 from app.schemas import NAME_PATTERN, InputModels, ObjectCreated, ObjectList, ObjectOut
 from app.settings import Settings
@@ -61,5 +61,45 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         if name not in found:
             raise NotFoundError(f"no object named {name!r}", field="name")
         return ObjectOut(**found[name])
+
+    @router.post(
+        ":import-mesh",
+        status_code=201,
+        response_model=ObjectCreated,
+        responses={200: {"model": ObjectCreated, "description": "the same object was there"}},
+        openapi_extra={
+            "requestBody": {
+                "required": True,
+                "content": {
+                    "application/octet-stream": {"schema": {"type": "string", "format": "binary"}}
+                },
+            }
+        },
+    )
+    async def import_mesh(
+        request: Request,
+        service: ServiceDep,
+        response: Response,
+        height: Annotated[float, Query(gt=0, le=1e6, description="slice height above the table")],
+        name: Annotated[str, Query(min_length=1, max_length=200, pattern=NAME_PATTERN)],
+        file_type: Annotated[Literal["stl", "obj", "ply", "off", "glb"], Query()] = "stl",
+        max_poses: Annotated[int | None, Query(ge=1, le=64)] = None,
+    ):
+        """Register a 3-D part from its triangle mesh (the request body, at most the body
+        limit): stable poses with their probabilities, each sliced at `height` into an
+        outline, faces carrying their out-of-plane normal. Same name, other geometry: 409."""
+        data = await request.body()
+        if not data:
+            raise InvalidInputError("the request body must hold the mesh file", field="body")
+        try:
+            created, stored = await service.import_mesh(data, file_type, height, name, max_poses)
+        except ObjectConflictError as exc:
+            raise ConflictError(
+                f"an object named {exc.args[0]!r} with other geometry is registered",
+                field="name",
+            ) from exc
+        response.status_code = 201 if created else 200
+        response.headers["Location"] = f"/v1/objects/{stored}"
+        return ObjectCreated(name=stored)
 
     return router

@@ -8,6 +8,7 @@ from .get_image_png_view import GetImagePngView
 from .get_image_svg_view import GetImageSvgView
 from .health import Health
 from .hypothesis_out import HypothesisOut
+from .import_mesh_file_type import ImportMeshFileType
 from .object_created import ObjectCreated
 from .object_in import ObjectIn
 from .object_list import ObjectList
@@ -43,6 +44,7 @@ __all__ = (
     "GetImageSvgView",
     "Health",
     "HypothesisOut",
+    "ImportMeshFileType",
     "ObjectCreated",
     "ObjectIn",
     "ObjectList",

@@ -40,49 +40,49 @@ def _parse_response(*, client: AuthenticatedClient | Client, response: httpx.Res
         return response_200
 
     if response.status_code == 400:
-        response_400 = Problem.from_dict(response.text)
+        response_400 = Problem.from_dict(response.json())
 
 
 
         return response_400
 
     if response.status_code == 401:
-        response_401 = Problem.from_dict(response.text)
+        response_401 = Problem.from_dict(response.json())
 
 
 
         return response_401
 
     if response.status_code == 404:
-        response_404 = Problem.from_dict(response.text)
+        response_404 = Problem.from_dict(response.json())
 
 
 
         return response_404
 
     if response.status_code == 409:
-        response_409 = Problem.from_dict(response.text)
+        response_409 = Problem.from_dict(response.json())
 
 
 
         return response_409
 
     if response.status_code == 412:
-        response_412 = Problem.from_dict(response.text)
+        response_412 = Problem.from_dict(response.json())
 
 
 
         return response_412
 
     if response.status_code == 413:
-        response_413 = Problem.from_dict(response.text)
+        response_413 = Problem.from_dict(response.json())
 
 
 
         return response_413
 
     if response.status_code == 422:
-        response_422 = Problem.from_dict(response.text)
+        response_422 = Problem.from_dict(response.json())
 
 
 

@@ -1,0 +1,70 @@
+"""POST /v1/objects:import-mesh: a triangle mesh upload becomes a registered object."""
+
+from __future__ import annotations
+
+import io
+
+import pytest
+import trimesh
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from app.settings import Settings
+
+
+def _stl(mesh: trimesh.Trimesh) -> bytes:
+    buf = io.BytesIO()
+    mesh.export(buf, file_type="stl")
+    return buf.getvalue()
+
+
+@pytest.fixture
+def client(tmp_path):
+    with TestClient(create_app(Settings(db_path=str(tmp_path / "m.db")))) as c:
+        yield c
+
+
+def test_a_box_mesh_registers_with_three_weighted_poses(client):
+    body = _stl(trimesh.creation.box(extents=(40, 60, 100)))
+    r = client.post(
+        "/v1/objects:import-mesh?height=8&name=box",
+        content=body,
+        headers={"Content-Type": "application/octet-stream"},
+    )
+    assert r.status_code == 201 and r.headers["Location"] == "/v1/objects/box"
+    obj = client.get("/v1/objects/box").json()
+    probs = sorted((p["probability"] for p in obj["stable_poses"]), reverse=True)
+    assert probs == pytest.approx([0.562, 0.3156, 0.1224], abs=0.03)
+    again = client.post(
+        "/v1/objects:import-mesh?height=8&name=box",
+        content=body,
+        headers={"Content-Type": "application/octet-stream"},
+    )
+    assert again.status_code == 200
+    other = _stl(trimesh.creation.box(extents=(40, 60, 90)))
+    clash = client.post("/v1/objects:import-mesh?height=8&name=box", content=other)
+    assert clash.status_code == 409
+
+
+@pytest.mark.parametrize(
+    ("query", "body", "field"),
+    [
+        ("height=500&name=tall", "box", "height"),
+        ("height=8&name=junk", b"not a mesh at all", "file"),
+        ("height=8&name=empty", b"", "body"),
+        ("height=-1&name=neg", "box", "height"),
+        ("height=8&name=open", "open", "mesh"),
+    ],
+)
+def test_bad_uploads_answer_problems_naming_the_field(client, query, body, field):
+    if body == "box":
+        body = _stl(trimesh.creation.box(extents=(40, 60, 100)))
+    elif body == "open":
+        mesh = trimesh.creation.box(extents=(40, 60, 100))
+        mesh.update_faces(mesh.faces[:-2].__len__() * [True] + [False, False])
+        body = _stl(mesh)
+    r = client.post(f"/v1/objects:import-mesh?{query}", content=body)
+    assert 400 <= r.status_code < 500
+    assert r.headers["content-type"] == "application/problem+json"
+    assert field in r.text
+    assert client.get("/healthz").status_code == 200
