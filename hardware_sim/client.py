@@ -1,0 +1,253 @@
+"""The closed-loop client: plan -> move -> touch -> observe, until done.
+
+The loop (:func:`run_recognition`) talks to two boundaries only:
+
+- a :class:`RecognitionService`, the planner side: "what next?" and "here is
+  what the probe found". :class:`InProcessService` calls the planner library
+  directly (``planner.session.Session`` + ``planner.strategies.plan``); an HTTP
+  implementation on the generated client fits the same three methods;
+- a :class:`hardware_sim.protocol.Probe`, the hardware side.
+
+World frame, lengths in the object files' unit, angles in radians.
+
+>>> from hardware_sim.presets import build_arm
+>>> from hardware_sim.world import World
+>>> from planner.library import object_from_dict
+>>> sq = object_from_dict({"name": "sq", "outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]})
+>>> ws = Workspace((0, 0), 100)
+>>> world = World(sq, 0, Pose(5.0, -3.0, 0.3), ws)
+>>> service = InProcessService([sq], SensorBounds(), ws, StrategyConfig(name="pdm"))
+>>> rec = run_recognition(service, build_arm(world, "ideal", seed=1), max_touches=6)
+>>> rec.status, rec.touches
+('localized', 2)
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Protocol
+
+import numpy as np
+
+from hardware_sim.protocol import Probe
+from planner.interpretation import RecognitionConfig
+from planner.session import Session
+from planner.strategies import StrategyConfig, plan
+from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
+
+__all__ = [
+    "Advice",
+    "Estimate",
+    "InProcessService",
+    "Recognition",
+    "RecognitionService",
+    "Step",
+    "Update",
+    "outline_distance",
+    "run_recognition",
+]
+
+DONE = ("localized", "inconsistent")
+
+
+@dataclass(frozen=True)
+class Advice:
+    """The planner's answer to "what next?": session `status`, the best `path`
+    (None when there is nothing to do or nothing informative), its predicted
+    `p_distinguishing` (None for the opening probe, before any hypothesis),
+    planning time `plan_ms`, `truncated` (the time budget stopped the search)."""
+
+    status: str
+    path: SensingPath | None
+    p_distinguishing: float | None
+    plan_ms: float
+    truncated: bool = False
+    note: str | None = None
+
+
+@dataclass(frozen=True)
+class Update:
+    """The session after an observation: `status`, number of `hypotheses` and of
+    equivalence `classes` left."""
+
+    status: str
+    hypotheses: int
+    classes: int
+
+
+@dataclass(frozen=True)
+class Estimate:
+    """One hypothesis as a client sees it: object, stable pose index, pose
+    (model -> world), pose error disk diameter `eps_t` (length), probability
+    and equivalence class."""
+
+    object: str
+    stable_pose: int
+    pose: Pose
+    eps_t: float
+    probability: float
+    equivalence_class: int
+
+
+class RecognitionService(Protocol):
+    """The planner side of the loop (in process now, over HTTP later)."""
+
+    def advise(self, sensor_position: Sequence[float]) -> Advice:
+        """Plan the next sensing path from the sensor's place on the safe circle."""
+        ...
+
+    def observe(self, observation: Observation) -> Update:
+        """Add one executed path and what it met."""
+        ...
+
+    def estimates(self, limit: int | None = None) -> list[Estimate]:
+        """Current hypotheses, most probable first."""
+        ...
+
+
+class InProcessService:
+    """:class:`RecognitionService` calling the planner library in this process.
+
+    Holds the (immutable) session and swaps it for the next on each observation.
+    `rng` drives the planner's random choices (the ``random`` strategy).
+    """
+
+    def __init__(
+        self,
+        models: Sequence[ObjectModel],
+        bounds: SensorBounds,
+        workspace: Workspace,
+        strategy: StrategyConfig | None = None,
+        recognition: RecognitionConfig | None = None,
+        rng: np.random.Generator | None = None,
+    ) -> None:
+        self.session = Session(models, bounds, workspace, recognition)
+        self.strategy = strategy or StrategyConfig()
+        self.rng = rng if rng is not None else np.random.default_rng(0)
+
+    def advise(self, sensor_position: Sequence[float]) -> Advice:
+        s = self.session
+        result = plan(
+            s.hypotheses,
+            s.models,
+            s.sensor,
+            s.workspace,
+            sensor_position,
+            self.strategy,
+            self.rng,
+            observations=s.observations,
+        )
+        best = result.best
+        return Advice(
+            status=result.status,
+            path=None if best is None else best.path,
+            p_distinguishing=None if best is None or not s.hypotheses else best.p_distinguishing,
+            plan_ms=result.elapsed_ms,
+            truncated=result.truncated,
+            note=result.note,
+        )
+
+    def observe(self, observation: Observation) -> Update:
+        self.session = self.session.observe(observation)
+        hyps = self.session.hypotheses
+        return Update(self.session.status, len(hyps), len({h.equivalence_class for h in hyps}))
+
+    def estimates(self, limit: int | None = None) -> list[Estimate]:
+        hyps = self.session.hypotheses[:limit]
+        return [
+            Estimate(
+                h.object,
+                h.stable_pose,
+                h.pose,
+                h.error_bound.eps_t,
+                h.probability,
+                h.equivalence_class,
+            )
+            for h in hyps
+        ]
+
+
+@dataclass(frozen=True)
+class Step:
+    """One probe of a recognition: the `advice` it followed, the `observation`
+    it produced, the session `update` after it, and the move's `distance`
+    (length) and `time` (s)."""
+
+    advice: Advice
+    observation: Observation
+    update: Update
+    distance: float
+    time: float
+
+    @property
+    def distinguishing(self) -> bool:
+        """True when one equivalence class was left after this touch (a DM)."""
+        return self.update.status == "localized"
+
+
+@dataclass(frozen=True)
+class Recognition:
+    """A whole recognition: final `status` (localized, inconsistent, ambiguous
+    when stopped by the touch limit, stuck when no informative path was left),
+    the `steps`, and the final `estimates` (most probable first)."""
+
+    status: str
+    steps: tuple[Step, ...]
+    estimates: tuple[Estimate, ...]
+
+    @property
+    def touches(self) -> int:
+        """Probes executed (misses included)."""
+        return len(self.steps)
+
+    @property
+    def distance(self) -> float:
+        return float(sum(s.distance for s in self.steps))
+
+    @property
+    def time(self) -> float:
+        return float(sum(s.time for s in self.steps))
+
+
+def run_recognition(service: RecognitionService, probe: Probe, max_touches: int) -> Recognition:
+    """Plan, move, touch, observe until `localized`, `inconsistent`, no path, or
+    `max_touches` probes. Never prints; the caller reports the steps."""
+    if max_touches < 1:
+        raise ValueError("max_touches must be >= 1")
+    steps: list[Step] = []
+    status = "awaiting_contact"
+    while len(steps) < max_touches:
+        advice = service.advise(probe.position)
+        if advice.status in DONE:
+            status = advice.status
+            break
+        if advice.path is None:
+            status = "stuck"
+            break
+        result = probe.execute(advice.path)
+        update = service.observe(result.observation)
+        steps.append(Step(advice, result.observation, update, result.distance, result.time))
+        status = update.status
+        if status in DONE:
+            break
+    return Recognition(status, tuple(steps), tuple(service.estimates(limit=None)))
+
+
+def outline_distance(
+    models: Sequence[ObjectModel], estimate: Estimate, name: str, stable_pose: int, pose: Pose
+) -> float:
+    """Hausdorff distance (length) between the vertex sets of the estimate's posed
+    outline and the true one (symmetric equivalents give 0); inf for another
+    object or another vertex count."""
+    by_name = {m.name: m for m in models}
+    if estimate.object != name:
+        return math.inf
+    est = by_name[name].stable_poses[estimate.stable_pose]
+    true = by_name[name].stable_poses[stable_pose]
+    if len(est.outline) != len(true.outline):
+        return math.inf
+    a, b = estimate.pose.apply(est.outline), pose.apply(true.outline)
+    d = np.hypot(*(a[:, None, :] - b[None, :, :]).transpose(2, 0, 1))
+    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))

@@ -1,0 +1,271 @@
+"""Experiments, the closed-loop client and `tactile simulate` (DESIGN §5, §7)."""
+
+from __future__ import annotations
+
+import json
+import math
+import sys
+from dataclasses import replace
+
+import numpy as np
+import pytest
+
+from app.cli import main
+from hardware_sim import accuracy, calibration, client, experiments, plots, presets, protocol
+from hardware_sim.calibration import calibration_ok, reliability_table, touch_records
+from hardware_sim.client import (
+    Advice,
+    Estimate,
+    InProcessService,
+    Update,
+    outline_distance,
+    run_recognition,
+)
+from hardware_sim.experiments import (
+    BINS,
+    ExperimentSpec,
+    TrialResult,
+    histogram,
+    run_experiment,
+    summarize,
+)
+from hardware_sim.presets import PRESETS, build_arm
+from hardware_sim.protocol import ProbeResult
+from hardware_sim.world import World
+from planner.library import dump_objects, object_from_dict
+from planner.strategies import StrategyConfig
+from planner.types import Observation, Pose, SensingPath, SensorBounds, Workspace
+
+ELL = object_from_dict(
+    {"name": "ell", "outline": [[0, 0], [40, 0], [40, 15], [15, 15], [15, 30], [0, 30]]}
+)
+WEDGE = object_from_dict({"name": "wedge", "outline": [[0, 0], [40, 0], [10, 25]]})
+SQUARE = object_from_dict({"name": "sq", "outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]})
+SMALL_WS = Workspace((0.0, 0.0), 80.0)
+JSON_KEYS = {
+    "strategy",
+    "trials",
+    "histogram",
+    "mean_touches",
+    "max_touches",
+    "success_rate",
+    "mean_plan_ms",
+    "p95_plan_ms",
+}
+
+
+def small_spec(**kw) -> ExperimentSpec:
+    base = {
+        "models": (ELL, WEDGE),
+        "strategies": ("pdm", "random"),
+        "trials": 3,
+        "seed": 3,
+        "workspace": SMALL_WS,
+        "max_touches": 6,
+    }
+    return ExperimentSpec(**{**base, **kw})
+
+
+# -- the closed loop ------------------------------------------------------------------
+
+
+def test_client_localizes_with_the_ideal_arm():
+    world = World(SQUARE, 0, Pose(5.0, -3.0, 0.3), Workspace((0, 0), 100))
+    service = InProcessService([SQUARE], SensorBounds(), world.workspace, StrategyConfig("pdm"))
+    rec = run_recognition(service, build_arm(world, "ideal", 1), max_touches=6)
+    assert rec.status == "localized" and rec.steps[-1].distinguishing
+    assert rec.steps[0].advice.p_distinguishing is None  # the opening probe
+    best = rec.estimates[0]
+    assert outline_distance([SQUARE], best, "sq", 0, world.pose) <= best.eps_t / 2 + 1e-6
+    assert rec.distance > 0 and rec.time > 0
+
+
+class _Service:
+    """A scripted planner side: always the same path, status from a list."""
+
+    def __init__(self, path: SensingPath | None, statuses: list[str]) -> None:
+        self.path, self.statuses, self.seen = path, statuses, []
+
+    def advise(self, sensor_position):
+        return Advice(self.statuses[0], self.path, 0.5, 1.0)
+
+    def observe(self, observation: Observation) -> Update:
+        self.seen.append(observation)
+        status = self.statuses.pop(0) if len(self.statuses) > 1 else self.statuses[0]
+        return Update(status, 2, 2)
+
+    def estimates(self, limit=None):
+        return [Estimate("sq", 0, Pose(0, 0, 0), 0.0, 1.0, 0)]
+
+
+class _MissingProbe:
+    position = (100.0, 0.0)
+
+    def execute(self, path: SensingPath) -> ProbeResult:
+        return ProbeResult(Observation(path, None), 1.0, 1.0)
+
+
+def test_client_stops_at_the_touch_limit_and_when_stuck():
+    path = SensingPath((100.0, 0.0), (-1.0, 0.0), 200.0)
+    rec = run_recognition(_Service(path, ["ambiguous"]), _MissingProbe(), max_touches=4)
+    assert rec.status == "ambiguous" and rec.touches == 4
+    rec = run_recognition(_Service(None, ["ambiguous"]), _MissingProbe(), max_touches=4)
+    assert rec.status == "stuck" and rec.touches == 0
+    rec = run_recognition(
+        _Service(path, ["ambiguous", "inconsistent"]), _MissingProbe(), max_touches=9
+    )
+    assert rec.status == "inconsistent" and rec.touches == 1
+
+
+def test_pose_check_accepts_symmetric_equivalents_only():
+    est = Estimate("sq", 0, Pose(1.0, 2.0, math.pi / 2), 0.0, 1.0, 0)
+    assert outline_distance([SQUARE], est, "sq", 0, Pose(1.0, 2.0, 0.0)) < 1e-9
+    assert outline_distance([SQUARE], est, "sq", 0, Pose(1.5, 2.0, 0.0)) == pytest.approx(0.5)
+    assert outline_distance([SQUARE, ELL], est, "ell", 0, Pose(1.0, 2.0, 0.0)) == math.inf
+
+
+# -- experiments ------------------------------------------------------------------------
+
+
+def test_histogram_follows_table_4_1():
+    shares = histogram([1, 3, 3, 12, 4], [True, True, True, True, False])
+    assert list(shares) == list(BINS)
+    assert shares["1"] == 0.2 and shares["3"] == 0.4 and shares[">10"] == 0.4
+    assert sum(shares.values()) == pytest.approx(1.0)
+
+
+def test_summary_charges_unlocalized_trials_the_touch_limit():
+    def trial(touches, status, ok):
+        return TrialResult(
+            "pdm", 0, "ell", touches, status, ok, 0.0, (1.0,) * touches, (), (), 0.0, 0.0
+        )
+
+    rows = summarize([trial(2, "localized", True), trial(3, "inconsistent", False)], ["pdm"], 8)
+    assert rows[0].mean_touches == 5.0 and rows[0].max_touches == 8
+    assert rows[0].success_rate == 0.5 and rows[0].histogram[">10"] == 0.5
+
+
+@pytest.fixture(scope="module")
+def sequential_results():
+    return run_experiment(small_spec(), workers=1)
+
+
+def _comparable(results):
+    # everything but the measured planning times
+    return [replace(r, plan_ms=()) for r in results]
+
+
+def test_trials_are_reproducible_across_worker_counts(sequential_results):
+    parallel = run_experiment(small_spec(), workers=2)
+    assert _comparable(parallel) == _comparable(sequential_results)
+    assert [(r.strategy, r.trial) for r in sequential_results] == [
+        (s, t) for s in ("pdm", "random") for t in range(3)
+    ]
+
+
+def test_every_strategy_sees_the_same_worlds(sequential_results):
+    truths = {(r.trial, r.truth) for r in sequential_results}
+    assert len(truths) == 3
+    assert all(r.success for r in sequential_results if r.localized)
+
+
+def test_dask_cluster_runs_the_same_trials(sequential_results):
+    distributed = pytest.importorskip("dask.distributed")
+    with distributed.LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=False, dashboard_address=None
+    ) as cluster:
+        spec = small_spec(strategies=("pdm",), trials=2)
+        got = run_experiment(spec, dask_address=cluster.scheduler_address)
+    want = [r for r in sequential_results if r.strategy == "pdm" and r.trial < 2]
+    assert _comparable(got) == _comparable(want)
+
+
+def test_missing_dask_is_reported_clearly(monkeypatch):
+    monkeypatch.setitem(sys.modules, "dask.distributed", None)
+    with pytest.raises(RuntimeError, match="dask"):
+        run_experiment(small_spec(trials=1), dask_address="tcp://127.0.0.1:1")
+
+
+def test_a_trial_past_its_timeout_counts_as_unlocalized():
+    results = run_experiment(small_spec(strategies=("pdm",), trials=2, trial_timeout=1e-3), 1)
+    assert [r.status for r in results] == ["timeout", "timeout"]
+    row = summarize(results, ["pdm"], 6)[0]
+    assert row.histogram[">10"] == 1.0 and row.success_rate == 0.0 and row.mean_touches == 6
+
+
+@pytest.fixture(scope="module")
+def object_file(tmp_path_factory):
+    path = tmp_path_factory.mktemp("objects") / "small.json"
+    dump_objects([ELL, WEDGE], path)
+    return str(path)
+
+
+def test_simulate_json_shape_and_plot(object_file, tmp_path, capsys):
+    png = tmp_path / "hist.png"
+    argv = ["simulate", "--objects", object_file, "--truth", "ell", "--strategy", "pdm"]
+    argv += ["--strategy", "thesis", "--trials", "2", "--seed", "4", "--sensor", "ideal"]
+    argv += ["--max-touches", "6", "--workers", "1", "--plot", str(png), "--json"]
+    assert main(argv) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert list(out) == ["strategies"]
+    assert [s["strategy"] for s in out["strategies"]] == ["pdm", "thesis"]
+    for row in out["strategies"]:
+        assert set(row) == JSON_KEYS
+        assert row["trials"] == 2
+        assert list(row["histogram"]) == [str(k) for k in range(1, 11)] + [">10"]
+        assert sum(row["histogram"].values()) == pytest.approx(1.0)
+        assert 1 <= row["mean_touches"] <= row["max_touches"] <= 6
+        assert 0.0 <= row["success_rate"] <= 1.0
+        assert row["p95_plan_ms"] >= 0 and row["mean_plan_ms"] >= 0
+    assert png.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_simulate_prints_the_table(object_file, capsys):
+    argv = ["simulate", "--objects", object_file, "--strategy", "pdm", "--trials", "1"]
+    argv += ["--seed", "2", "--position-error", "0.5", "--normal-error", "0.03"]
+    argv += ["--max-touches", "5", "--workers", "1"]
+    assert main(argv) == 0
+    out = capsys.readouterr().out
+    assert "bounds 0.5" in out and out.splitlines()[2].split()[:3] == ["strategy", "1", "2"]
+
+
+def test_simulate_rejects_a_preset_with_explicit_errors(object_file, capsys):
+    argv = ["simulate", "--objects", object_file, "--strategy", "pdm", "--trials", "1"]
+    argv += ["--sensor", "thesis_sensor", "--position-error", "1"]
+    assert main(argv) == 2
+    assert "--sensor" in capsys.readouterr().err
+
+
+def test_simulate_names_an_unknown_truth(object_file, capsys):
+    argv = ["simulate", "--objects", object_file, "--strategy", "pdm", "--truth", "nope"]
+    assert main(argv) == 2
+    assert "nope" in capsys.readouterr().err
+
+
+# -- calibration ----------------------------------------------------------------------------
+
+
+def test_reliability_table_bins_and_judges():
+    rng = np.random.default_rng(0)
+    p = rng.uniform(0, 1, 5000)
+    calibrated = reliability_table(p, rng.random(5000) < p)
+    assert sum(b.count for b in calibrated) == 5000
+    assert calibration_ok(calibrated)
+    biased = reliability_table(p, rng.random(5000) < p**3)
+    assert not calibration_ok(biased)
+    few = reliability_table(np.full(20, 0.95), np.zeros(20, bool))
+    assert few[-1].count == 20 and few[-1].ok is None and calibration_ok(few)
+
+
+def test_touch_records_skip_the_opening(sequential_results):
+    pred, obs = touch_records(sequential_results)
+    planned = sum(len(r.p_distinguishing) for r in sequential_results)
+    assert 0 < len(pred) < planned
+    assert np.all((pred >= 0) & (pred <= 1)) and obs.dtype == bool
+
+
+def test_public_names_exist():
+    for module in (experiments, client, calibration, presets, protocol, accuracy, plots):
+        for name in module.__all__:
+            assert hasattr(module, name)
+    assert "thesis_sensor" in PRESETS
