@@ -29,20 +29,37 @@ def _objects(value: str) -> list:
 
 
 def cmd_bench(args: argparse.Namespace) -> int:
-    from hardware_sim.bench import default_bounds, recognition_stats
+    from hardware_sim.bench import default_bounds, planning_stats, recognition_stats
     from planner.types import Workspace
 
     workspace = Workspace((0.0, 0.0), args.radius)
-    rows = []
+    rows, plans = [], []
     for name in args.sets:
         models = _objects(name)
         for bounds in default_bounds():
+            error = {
+                "set": name,
+                "position_error": bounds.position_error,
+                "normal_error_deg": round(math.degrees(bounds.normal_error), 3),
+            }
+            if args.planning:
+                for s in planning_stats(
+                    models,
+                    bounds,
+                    workspace,
+                    args.strategies,
+                    args.plan_trials,
+                    3,
+                    args.seed,
+                    args.repeat,
+                ):
+                    plans.append({**error, **s.__dict__})
+            if args.no_recognition:
+                continue
             stats = recognition_stats(models, bounds, workspace, args.trials, 3, args.seed)
             rows.append(
                 {
-                    "set": name,
-                    "position_error": bounds.position_error,
-                    "normal_error_deg": round(math.degrees(bounds.normal_error), 3),
+                    **error,
                     "hypotheses_after": stats.hypotheses,
                     "classes_after": stats.classes,
                     "update_p50_ms": stats.update_p50_ms,
@@ -51,8 +68,19 @@ def cmd_bench(args: argparse.Namespace) -> int:
                 }
             )
     if args.json:
-        print(json.dumps({"recognition": rows}, indent=1))
+        out = {"recognition": rows} if not args.no_recognition else {}
+        if args.planning:
+            out["planning"] = plans
+        print(json.dumps(out, indent=1))
         return 0
+    if rows:
+        _print_recognition(rows)
+    if plans:
+        _print_planning(plans, args.strategies)
+    return 0
+
+
+def _print_recognition(rows: list[dict]) -> None:
     print(
         f"{'set':14s} {'error':>12s}  hypotheses after 1/2/3     "
         "classes after 1/2/3    update p50/p95 ms"
@@ -65,7 +93,21 @@ def cmd_bench(args: argparse.Namespace) -> int:
             f"{r['set']:14s} {err:>12s}  {h}   {c}   "
             f"{r['update_p50_ms']:6.1f} {r['update_p95_ms']:6.1f}"
         )
-    return 0
+
+
+def _print_planning(plans: list[dict], strategies: Sequence[str]) -> None:
+    heads = "".join(f" {s + ' p50/p95 ms':>22s}" for s in strategies)
+    print(f"{'set':14s} {'error':>12s} {'touches':>7s} {'hyps':>11s} {'cands':>9s}{heads}")
+    for r in plans:
+        err = f"{r['position_error']:g}/{r['normal_error_deg']:g}deg"
+        hyps = f"{r['hypotheses']:.0f}/{r['hypotheses_max']}"
+        cands = f"{r['candidates']:.0f}/{r['candidates_max']}"
+        times = "".join(
+            f" {r['p50_ms'][s]:10.1f} {r['p95_ms'][s]:7.1f}{'*' if r['truncated'][s] else ' ':3s}"
+            for s in strategies
+        )
+        print(f"{r['set']:14s} {err:>12s} {r['touches']:7d} {hyps:>11s} {cands:>9s}{times}")
+    print("hyps, cands: mean/max over trials; * some plans cut short by the time budget")
 
 
 def cmd_demo(args: argparse.Namespace) -> int:
@@ -106,6 +148,15 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--seed", type=int, default=0)
     bench.add_argument("--radius", type=float, default=200.0, help="safe circle radius")
     bench.add_argument("--json", action="store_true")
+    bench.add_argument(
+        "--planning", action="store_true", help="also time plans after 0-3 touches (§9)"
+    )
+    bench.add_argument("--no-recognition", action="store_true", help="skip the recognition part")
+    bench.add_argument(
+        "--strategies", nargs="+", default=["pdm", "pruning", "lookahead"], help="planning"
+    )
+    bench.add_argument("--plan-trials", type=int, default=10, help="planning trials per set")
+    bench.add_argument("--repeat", type=int, default=1, help="runs per plan (median kept)")
     bench.set_defaults(func=cmd_bench)
 
     mesh = sub.add_parser("import-mesh", help="3-D mesh -> stable poses sliced at a height")

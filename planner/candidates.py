@@ -15,12 +15,12 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Any
 
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.posed import contains_points
+from planner.posed import segment_distance
 from planner.types import SensingPath, SensorBounds, Workspace
 
 if TYPE_CHECKING:
@@ -179,10 +179,15 @@ def _ring_points(workspace: Workspace, count: int, start_angle: float) -> np.nda
     )
 
 
-def _polygons(posed: PosedSet) -> list:
+def _polygons(posed: PosedSet) -> np.ndarray:
+    """The posed outlines (holes cut out) as shapely polygons, built in one pass."""
     import shapely
 
-    return [shapely.Polygon(outline, list(holes)).buffer(0) for outline, holes in posed.rings]
+    rings = [ring for outline, holes in posed.rings for ring in (outline, *holes)]
+    ring_of = np.repeat(np.arange(len(rings)), [len(r) for r in rings])
+    polygon_of = np.repeat(np.arange(len(posed.rings)), [1 + len(h) for _, h in posed.rings])
+    made = shapely.linearrings(np.concatenate(rings), indices=ring_of)
+    return shapely.buffer(shapely.polygons(made, indices=polygon_of), 0)
 
 
 def union_centre(posed: PosedSet) -> np.ndarray:
@@ -195,6 +200,43 @@ def union_centre(posed: PosedSet) -> np.ndarray:
     return np.array(union.centroid.coords[0])
 
 
+def _intersection(polygons: np.ndarray, probe: int = 16) -> Any:
+    """Intersection of all polygons: a few first, then, in pairs, only those that
+    do not already contain the running intersection (the others leave it as is;
+    one long chain of intersections also piles up slivers)."""
+    import shapely
+
+    def tree(parts: np.ndarray) -> Any:
+        while len(parts) > 1:
+            pairs = shapely.intersection(parts[0 : len(parts) - 1 : 2], parts[1::2])
+            parts = np.concatenate([pairs, parts[len(parts) - len(parts) % 2 :]])
+        return parts[0]
+
+    step = max(1, len(polygons) // probe)
+    head = tree(polygons[::step])
+    if shapely.is_empty(head):
+        return head
+    rest = np.delete(polygons, np.arange(0, len(polygons), step))
+    cutting = rest[~shapely.contains(rest, head)]
+    return tree(np.concatenate([[head], cutting]))
+
+
+def _grid_depth(posed: PosedSet, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
+    """`contains_points` at the grid points (x, y) for y in ys, x in xs (row-major),
+    as (len(ys) * len(xs), H) bool: each row of the grid crosses a face at one x."""
+    y = ys[:, None, None]
+    s, e = posed.start[None], posed.end[None]
+    straddle = ((s[..., 1] > y) != (e[..., 1] > y)) & posed.valid[None]
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        x_cross = s[..., 0] + (y - s[..., 1]) * (e[..., 0] - s[..., 0]) / (e[..., 1] - s[..., 1])
+    x_cross = np.where(straddle, x_cross, -np.inf)
+    # even-odd rule: a point is inside when a ray toward +x crosses an odd number of faces
+    inside = np.zeros((len(ys), len(xs), len(posed)), dtype=bool)
+    for f in range(x_cross.shape[-1]):
+        inside ^= xs[None, :, None] < x_cross[:, None, :, f]
+    return inside.reshape(len(ys) * len(xs), -1)
+
+
 def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
     """Up to `count` spread points inside the intersection area (IA).
 
@@ -202,12 +244,10 @@ def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
     representative point. When the IA is empty, points inside the largest
     weight of posed outlines stand in for it.
     """
-    import shapely
-
     if count == 0:
         return np.zeros((0, 2))
     aims: list[np.ndarray] = []
-    ia = shapely.intersection_all(_polygons(posed))
+    ia = _intersection(_polygons(posed))
     if not ia.is_empty and ia.area > 0:
         centroid = ia.centroid
         first = centroid if ia.contains(centroid) else ia.representative_point()
@@ -216,7 +256,7 @@ def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     axes = [np.linspace(lo[i], hi[i], grid + 2)[1:-1] for i in range(2)]
     samples = np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 2)
-    depth = contains_points(posed, samples).astype(float) @ posed.weight
+    depth = _grid_depth(posed, *axes).astype(float) @ posed.weight
     if depth.max(initial=0.0) > 0:
         inside = samples[depth >= depth.max() - 1e-9]
         chosen = list(aims) or [inside[0]]
@@ -237,8 +277,6 @@ def _boundary_aims(
 
     Returns (points (N, 2), outward normals (N, 2)).
     """
-    from planner.geometry import point_segment_distance, wrap_angle
-
     if config.boundary_aims == 0 or config.face_samples == 0:
         return np.zeros((0, 2)), np.zeros((0, 2))
     frac = (np.arange(config.face_samples) + 0.5) / config.face_samples
@@ -251,25 +289,14 @@ def _boundary_aims(
     if len(pts) > limit:
         pick = np.sort(rng.choice(len(pts), size=limit, replace=False))
         pts, owner, normals = pts[pick], owner[pick], normals[pick]
-    member = np.zeros((len(posed), posed.n_classes))
-    member[np.arange(len(posed)), posed.cls] = 1.0
+    shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
+    q, h = _blocking_pairs(posed, sensor, pts, owner, normals)
+    shared[q, posed.cls[h]] = True
     strength = np.empty(len(pts))
     chunk = max(1, 1_000_000 // max(1, posed.valid.size))
-    angle_faces = np.arctan2(posed.normal[..., 1], posed.normal[..., 0])
     for lo in range(0, len(pts), chunk):
-        q, h = pts[lo : lo + chunk], owner[lo : lo + chunk]
-        # blocking: another hypothesis' face within the pose/sensor tolerance, same normal
-        p_tol = 2 * sensor.position_error + (posed.eps_t[h][:, None] + posed.eps_t[None]) / 2
-        n_tol = 2 * sensor.normal_error + posed.rotation[h][:, None] + posed.rotation[None]
-        dist = point_segment_distance(q[:, None, None, :], posed.start[None], posed.end[None])
-        ang = np.arctan2(normals[lo : lo + chunk, 1], normals[lo : lo + chunk, 0])
-        turn = np.abs(wrap_angle(angle_faces[None] - ang[:, None, None]))
-        shared = (
-            (dist <= p_tol[..., None] + 1e-9 * posed.scale)
-            & (turn <= n_tol[..., None] + 1e-9)
-            & posed.valid[None]
-        ).any(axis=-1)
-        strength[lo : lo + chunk] = ((shared.astype(float) @ member) > 0) @ posed.class_weight
+        # blocking strength: weight of the classes with a face there
+        strength[lo : lo + chunk] = shared[lo : lo + chunk] @ posed.class_weight
     differs = strength < 1 - 1e-9
     pts, normals, strength = pts[differs], normals[differs], strength[differs]
     order = rng.permutation(len(pts))
@@ -280,6 +307,96 @@ def _boundary_aims(
     _, first = np.unique(cells, axis=0, return_index=True)
     chosen = order[np.sort(first)][: config.boundary_aims]
     return pts[chosen], normals[chosen]
+
+
+def _blocking_pairs(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    normals: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(point, hypothesis) pairs where a face of the hypothesis blocks the point: within
+    the pose/sensor tolerance of it, with the same normal.
+
+    Faces fall into buckets of normal angle at least as wide as the widest angle
+    tolerance; in a bucket they are sorted by their extent along its direction n,
+    and a face within p of a point q spans some of [n.q - p, n.q + p]. Only the
+    faces of a point's bucket and its two neighbours that pass this are measured.
+    """
+    from planner.geometry import wrap_angle
+
+    fh, ff = np.nonzero(posed.valid)
+    face_angle = np.arctan2(posed.normal[fh, ff, 1], posed.normal[fh, ff, 0])
+    angle = np.arctan2(normals[:, 1], normals[:, 0])
+    # turn <= n_tol + 1e-9 with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
+    widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
+    n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + 1e-9), 1e-12)))
+    if n_buckets < 3:  # some tolerance spans a third of the directions: every face
+        q = np.repeat(np.arange(len(pts)), len(fh))
+        face = np.tile(np.arange(len(fh)), len(pts))
+    else:
+        q, face = _bucket_pairs(posed, sensor, pts, owner, angle, face_angle, n_buckets)
+    h, f, g = fh[face], ff[face], owner[q]
+    p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
+    n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
+    s, e, p = posed.start[h, f], posed.end[h, f], pts[q]
+    dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
+    turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
+    ok = (dist <= p_tol + 1e-9 * posed.scale) & (turn <= n_tol + 1e-9)
+    return q[ok], h[ok]
+
+
+def _bucket_pairs(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    angle: np.ndarray,
+    face_angle: np.ndarray,
+    n_buckets: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate (point, face) pairs: same or neighbouring normal-angle bucket, and
+    overlapping extents along the bucket's direction (a superset of the blocking pairs)."""
+    from planner.bitsets import sorted_count
+
+    fh, ff = np.nonzero(posed.valid)
+    width = 2 * np.pi / n_buckets
+    bucket = np.floor((face_angle + np.pi) / width).astype(np.int64) % n_buckets
+    centre = (bucket + 0.5) * width - np.pi
+    s, e = posed.start[fh, ff], posed.end[fh, ff]
+    # extent of each face along its bucket's direction n
+    along_s = s[:, 0] * np.cos(centre) + s[:, 1] * np.sin(centre)
+    along_e = e[:, 0] * np.cos(centre) + e[:, 1] * np.sin(centre)
+    low, high = np.minimum(along_s, along_e), np.maximum(along_s, along_e)
+    used, row = np.unique(bucket, return_inverse=True)
+    span = np.zeros(len(used))
+    np.maximum.at(span, row, high - low)
+    order = np.lexsort((low, row))
+    size = np.bincount(row, minlength=len(used))
+    first = np.cumsum(size) - size
+    sorted_low = np.full((len(used), int(size.max())), np.inf)
+    rank = np.arange(len(order)) - first[row[order]]
+    sorted_low[row[order], rank] = low[order]
+    # the point's bucket and its two neighbours, where used
+    mine = np.floor((angle + np.pi) / width).astype(np.int64)
+    near = (mine[:, None] + np.array([-1, 0, 1])) % n_buckets  # (Q, 3)
+    slot = np.clip(np.searchsorted(used, near), 0, len(used) - 1)
+    ok = used[slot] == near
+    qi, k = np.nonzero(ok)
+    b = slot[qi, k]
+    n_dir = (used[b] + 0.5) * width - np.pi
+    x = pts[qi, 0] * np.cos(n_dir) + pts[qi, 1] * np.sin(n_dir)
+    # within p of the point: 2 eps_d + (eps_t(g) + eps_t(h)) / 2, at most this
+    reach = 2 * sensor.position_error + (posed.eps_t[owner[qi]] + posed.eps_t.max()) / 2
+    reach = reach + 2e-9 * posed.scale
+    lo = sorted_count(sorted_low, b, x - reach - span[b], "left")
+    hi = sorted_count(sorted_low, b, x + reach, "right")
+    count = hi - lo
+    q = np.repeat(qi, count)
+    at = np.arange(len(q)) - np.repeat(np.cumsum(count) - count, count)
+    face = order[first[np.repeat(b, count)] + np.repeat(lo, count) + at]
+    return q, face
 
 
 def _dedupe(

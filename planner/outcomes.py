@@ -9,9 +9,13 @@ in radians (counter-clockwise positive). The pipeline is three numpy passes:
    hypothesis at once (chunked over candidates): first hit (point, face normal)
    or miss, and the ways the outcome is uncertain (vertex, grazing, near miss,
    contact at the very end of the path);
-3. :func:`confusability` compares the outcomes of every pair of hypotheses on
-   every path within the §4.11 tolerances, and :func:`survivor_table` turns the
-   result into survivor sets over equivalence classes, stored as bitsets.
+3. :func:`class_survivors` compares the outcomes of every pair of hypotheses on
+   every path within the §4.11 tolerances and gives the survivor sets over
+   equivalence classes as bitsets (:class:`SurvivorTable`). Slot points lie on
+   the path, so a match is an overlap of intervals along it and of normal arcs:
+   sorted interval ends answer all pairs at once with unions of bitsets, and
+   only slots near a tie (or off the path) are compared one by one. The
+   hypothesis-level matrix (:func:`confusability`) comes from the same pass.
 
 Posed hypotheses live in :mod:`planner.posed` and candidate paths in
 :mod:`planner.candidates`; both are re-exported here.
@@ -25,11 +29,20 @@ from typing import Any
 
 import numpy as np
 
-from planner.bitsets import pack_bits, unpack_bits
+from planner.bitsets import (
+    IntervalUnions,
+    SurvivorTable,
+    close_ends,
+    compact,
+    n_words,
+    one_hot,
+    pack_bits,
+    transpose_bits,
+    unpack_bits,
+)
 from planner.candidates import CandidateConfig, Candidates, generate_candidates
 from planner.errors import PlannerError
-from planner.geometry import point_segment_distance, wrap_angle
-from planner.posed import PosedSet, contains_points, pose_hypotheses
+from planner.posed import PosedSet, cast_paths, contains_points, pose_hypotheses
 from planner.types import SensorBounds
 
 __all__ = [
@@ -39,6 +52,8 @@ __all__ = [
     "Outcomes",
     "PosedSet",
     "SurvivorTable",
+    "class_bits",
+    "class_survivors",
     "confusability",
     "contains_points",
     "generate_candidates",
@@ -93,7 +108,10 @@ class Outcomes:
     `slot_angle +- slot_spread` between the faces meeting at the vertex, slot 2
     the path slipping past the contact (the next hit further on, or a miss).
     `slot_slack` widens the point tolerance of grazing hits, whose contact
-    slides along the path by `tolerance / |cos(incidence)|`.
+    slides along the path by `tolerance / |cos(incidence)|`. `slot_distance`
+    is how far along the path a slot's point lies (NaN for a miss) and
+    `slot_offset` how far off the path, to its left (only a near miss's closest
+    approach lies off it); `heading` (C,) is each path's direction angle.
     """
 
     hit: np.ndarray
@@ -112,29 +130,21 @@ class Outcomes:
     slot_angle: np.ndarray
     slot_spread: np.ndarray
     slot_slack: np.ndarray
+    slot_distance: np.ndarray
+    slot_offset: np.ndarray
+    heading: np.ndarray
+
+    @classmethod
+    def concat(cls, parts: list[Outcomes]) -> Outcomes:
+        """The outcomes of several groups of paths, one after the other."""
+        return cls(
+            **{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)}
+        )
 
     @property
     def uncertain(self) -> np.ndarray:
         """(C, H) bool: the outcome may be something other than the nominal one."""
         return self.vertex | self.grazing | self.near_miss | self.end_of_path
-
-
-def _cross(a: np.ndarray, b: np.ndarray) -> np.ndarray:
-    return a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-
-
-def _take(values: np.ndarray, index: np.ndarray) -> np.ndarray:
-    """values (..., F[, 2]) at index (...) along the face axis."""
-    if values.ndim == index.ndim + 2:
-        return np.take_along_axis(values, index[..., None, None], axis=-2)[..., 0, :]
-    return np.take_along_axis(values, index[..., None], axis=-1)[..., 0]
-
-
-def _cone(a: np.ndarray, b: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """Centre angle and half-width (radians) of the shorter arc between unit normals a, b."""
-    ang_a = np.arctan2(a[..., 1], a[..., 0])
-    diff = wrap_angle(np.arctan2(b[..., 1], b[..., 0]) - ang_a)
-    return wrap_angle(ang_a + diff / 2), np.abs(diff) / 2
 
 
 def _tolerances(posed: PosedSet, sensor: SensorBounds, config: OutcomeConfig) -> dict:
@@ -174,175 +184,17 @@ def predict_outcomes(
     origins = np.asarray(origins, dtype=float).reshape(-1, 2)
     directions = np.asarray(directions, dtype=float).reshape(-1, 2)
     lengths = np.asarray(lengths, dtype=float).reshape(-1)
-    n_paths, (n_hyp, n_faces) = len(origins), posed.valid.shape
     tol = _tolerances(posed, sensor, config)
-    chunk = max(1, config.chunk_elements // max(1, n_hyp * n_faces))
-    parts = [
-        _outcome_chunk(
-            posed, tol, origins[i : i + chunk], directions[i : i + chunk], lengths[i : i + chunk]
+    return Outcomes(
+        **cast_paths(
+            posed,
+            origins,
+            directions,
+            lengths,
+            (tol["geometric"], tol["vertex"], tol["graze_sin"]),
+            config.chunk_elements,
         )
-        for i in range(0, n_paths, chunk)
-    ]
-    if not parts:
-        parts = [_outcome_chunk(posed, tol, origins, directions, lengths)]
-    return Outcomes(**{k: np.concatenate([p[k] for p in parts]) for k in parts[0]})
-
-
-def _outcome_chunk(
-    posed: PosedSet, tol: dict, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray
-) -> dict[str, np.ndarray]:
-    o = origins[:, None, None, :]
-    d = directions[:, None, None, :]
-    length = lengths[:, None]
-    ray_end = origins + directions * lengths[:, None]
-    s, e, n = posed.start[None], posed.end[None], posed.normal[None]
-    edge = e - s
-    # o + t d meets s + u (e - s) at t = (w x e)/(d x e), u = (w x d)/(d x e), with w = s - o
-    denom = _cross(d, edge)
-    w = s - o
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        t = _cross(w, edge) / denom
-        u = _cross(w, d) / denom
-    meets = posed.valid[None] & (np.abs(denom) > 1e-12 * posed.length[None])
-    meets &= (t >= 0) & (t <= length[..., None]) & (u >= 0) & (u <= 1)
-    t = np.where(meets, t, np.inf)
-    face = np.argmin(t, axis=-1)
-    dist = _take(t, face)
-    hit = np.isfinite(dist)
-    face = np.where(hit, face, -1)
-    f = np.maximum(face, 0)
-    point = origins[:, None, :] + np.where(hit, dist, 0.0)[..., None] * directions[:, None, :]
-    normal = _take(np.broadcast_to(n, (*t.shape, 2)), f)
-    cos_in = np.abs(np.einsum("ck,chk->ch", directions, normal))
-    geometric, vertex_tol = tol["geometric"][None], tol["vertex"][None]
-    graze_sin = tol["graze_sin"][None]
-
-    # vertex: the contact lies within the vertex zone of one end of the face hit
-    u_hit = np.clip(_take(u, f), 0.0, 1.0)
-    face_len = _take(np.broadcast_to(posed.length[None], t.shape), f)
-    to_start, to_end = u_hit * face_len, (1 - u_hit) * face_len
-    vertex = hit & (np.minimum(to_start, to_end) <= vertex_tol)
-    prev, nxt = (np.broadcast_to(a[None], t.shape) for a in (posed.prev, posed.next))
-    adjacent = np.where(to_start <= to_end, _take(prev, f), _take(nxt, f))
-    adj_normal = _take(np.broadcast_to(n, (*t.shape, 2)), adjacent)
-    grazing = hit & (cos_in < graze_sin)
-    # a face displaced by delta moves the contact along the path by delta / |cos|
-    along = geometric / np.maximum(cos_in, graze_sin)
-    end_of_path = hit & (dist > length - along)
-
-    # slip-through: the path passes the local geometry of the contact and goes on; past
-    # the contact it is outside the object, so only faces turned toward it count
-    near_contact = point_segment_distance(point[:, :, None, :], s, e) <= vertex_tol[..., None]
-    facing = np.einsum("ck,chfk->chf", directions, np.broadcast_to(n, (*t.shape, 2))) < 0
-    t_slip = np.where(near_contact | ~facing, np.inf, t)
-    slip_face = np.argmin(t_slip, axis=-1)
-    slip_dist = _take(t_slip, slip_face)
-    facing_away = np.einsum("ck,chk->ch", directions, adj_normal) > -graze_sin
-    slip = (vertex & facing_away) | grazing | end_of_path
-    slip_hit = slip & np.isfinite(slip_dist) & ~end_of_path
-    slip_point = (
-        origins[:, None, :] + np.where(slip_hit, slip_dist, 0.0)[..., None] * directions[:, None, :]
     )
-    slip_normal = _take(np.broadcast_to(n, (*t.shape, 2)), slip_face)
-
-    near_miss, near_point, m_centre, m_spread = _near_miss(
-        posed, o, ray_end, hit, geometric, prev, nxt
-    )
-
-    # outcome slots
-    nan2 = np.full(point.shape, np.nan)
-    angle0 = np.arctan2(normal[..., 1], normal[..., 0])
-    v_centre, v_spread = _cone(normal, adj_normal)
-    slot_valid = np.stack([np.ones_like(hit), vertex | near_miss, slip], axis=-1)
-    slot_hit = np.stack([hit, vertex | near_miss, slip_hit], axis=-1)
-    slot_point = np.stack(
-        [
-            np.where(hit[..., None], point, nan2),
-            np.where(vertex[..., None], point, near_point),
-            np.where(slip_hit[..., None], slip_point, nan2),
-        ],
-        axis=-2,
-    )
-    slot_angle = np.stack(
-        [
-            angle0,
-            np.where(vertex, v_centre, m_centre),
-            np.arctan2(slip_normal[..., 1], slip_normal[..., 0]),
-        ],
-        axis=-1,
-    )
-    slot_spread = np.stack(
-        [np.zeros_like(angle0), np.where(vertex, v_spread, m_spread), np.zeros_like(angle0)],
-        axis=-1,
-    )
-    slack = np.where(hit, along - geometric, 0.0)
-    slot_slack = np.stack([slack, np.where(vertex, slack, 0.0), np.zeros_like(slack)], axis=-1)
-    return {
-        "hit": hit,
-        "distance": dist,
-        "point": np.where(hit[..., None], point, nan2),
-        "normal": np.where(hit[..., None], normal, nan2),
-        "face": face,
-        "travel": np.where(hit, dist, length),
-        "vertex": vertex,
-        "grazing": grazing,
-        "near_miss": near_miss,
-        "end_of_path": end_of_path,
-        "slot_valid": slot_valid,
-        "slot_hit": slot_hit,
-        "slot_point": slot_point,
-        "slot_angle": slot_angle,
-        "slot_spread": slot_spread,
-        "slot_slack": slot_slack,
-    }
-
-
-def _near_miss(
-    posed: PosedSet,
-    o: np.ndarray,
-    ray_end: np.ndarray,
-    hit: np.ndarray,
-    geometric: np.ndarray,
-    prev: np.ndarray,
-    nxt: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
-    """Misses passing within `geometric` of an outline: (flag, closest outline point,
-    centre and half-width of the normals there), each (c, H)."""
-    s, e, n = posed.start[None], posed.end[None], posed.normal[None]
-    shape = prev.shape
-    # the closest approach of two segments involves an endpoint of one of them
-    d_start = point_segment_distance(s, o, ray_end[:, None, None, :])
-    d_end = point_segment_distance(e, o, ray_end[:, None, None, :])
-    d_ray = point_segment_distance(ray_end[:, None, None, :], s, e)
-    gap = np.where(posed.valid[None], np.minimum(np.minimum(d_start, d_end), d_ray), np.inf)
-    near_face = np.argmin(gap, axis=-1)
-    near_miss = ~hit & (_take(gap, near_face) <= geometric)
-    which = np.argmin(
-        np.stack([_take(d_start, near_face), _take(d_end, near_face), _take(d_ray, near_face)]),
-        axis=0,
-    )
-    nf_start = _take(np.broadcast_to(s, (*shape, 2)), near_face)
-    nf_end = _take(np.broadcast_to(e, (*shape, 2)), near_face)
-    nf_normal = _take(np.broadcast_to(n, (*shape, 2)), near_face)
-    edge_nf = nf_end - nf_start
-    proj = np.clip(
-        np.einsum("chk,chk->ch", ray_end[:, None, :] - nf_start, edge_nf)
-        / np.maximum(np.einsum("chk,chk->ch", edge_nf, edge_nf), 1e-300),
-        0.0,
-        1.0,
-    )
-    # at a vertex of the face the normal may be either face's; on the face, its own
-    point = np.where(
-        (which == 0)[..., None],
-        nf_start,
-        np.where((which == 1)[..., None], nf_end, nf_start + proj[..., None] * edge_nf),
-    )
-    other = np.where(which == 0, _take(prev, near_face), _take(nxt, near_face))
-    other_normal = np.where(
-        (which == 2)[..., None], nf_normal, _take(np.broadcast_to(n, (*shape, 2)), other)
-    )
-    centre, spread = _cone(nf_normal, other_normal)
-    return near_miss, point, centre, spread
 
 
 def confusability(
@@ -359,29 +211,227 @@ def confusability(
     hypotheses are confusable when any of their possible outcomes match;
     members of one equivalence class are always confusable.
     """
+    n_hyp = len(posed)
+    rows = _match_rows(posed, outcomes, sensor, config)
+    conf = unpack_bits(rows | transpose_bits(rows, n_hyp), n_hyp)
+    return conf | (posed.cls[:, None] == posed.cls[None, :])
+
+
+def class_survivors(
+    posed: PosedSet,
+    outcomes: Outcomes,
+    sensor: SensorBounds,
+    config: OutcomeConfig | None = None,
+) -> SurvivorTable:
+    """The class survivor table straight from the outcomes, as
+    ``survivor_table(posed, confusability(...))`` but never forming the (C, H, H)
+    matrix: class B survives truth class A on a path when some member of B is
+    confusable with some member of A."""
+    return SurvivorTable.from_bits(class_bits(posed, outcomes, sensor, config), posed.class_weight)
+
+
+def class_bits(
+    posed: PosedSet,
+    outcomes: Outcomes,
+    sensor: SensorBounds,
+    config: OutcomeConfig | None = None,
+) -> np.ndarray:
+    """(C, K, W) class confusability as bitsets (see :func:`class_survivors`)."""
+    n_hyp, n_cls = len(posed), posed.n_classes
+    # hypotheses in class order: rows and bits of one class side by side
+    order = np.argsort(posed.cls, kind="stable")
+    rows = _match_rows(posed, outcomes, sensor, config, order)
+    if n_cls == n_hyp:  # one hypothesis per class: R is the class relation
+        return rows | transpose_bits(rows, n_hyp)
+    by_class = posed.cls[order]
+    first = np.flatnonzero(np.r_[True, by_class[1:] != by_class[:-1]])
+    # X[c, A, g] = OR_{h in A} R[c, h, g]; then Y[c, B, A] = OR_{g in B} X[c, A, g]
+    y = transpose_bits(np.bitwise_or.reduceat(rows, first, axis=1), n_hyp)
+    y = np.bitwise_or.reduceat(y, first, axis=1)
+    # confusability is symmetric: conf = Y | Y^T
+    return y | transpose_bits(y, n_cls)
+
+
+#: Angle margin (radians) where the cosine test's 1e-12 slack can still decide:
+#: cos(A) - 1e-12 = cos(A + x) needs x <= sqrt(2e-12) ~ 1.42e-6.
+_ANGLE_BAND = 1.5e-6
+
+
+def _match_rows(
+    posed: PosedSet,
+    outcomes: Outcomes,
+    sensor: SensorBounds,
+    config: OutcomeConfig | None = None,
+    order: np.ndarray | None = None,
+) -> np.ndarray:
+    """(C, H, W) bitsets R over hypotheses (taken in `order`, default as given) such
+    that R | R^T is the confusability.
+
+    Slot points lie on the path (a near miss's closest approach aside), so two
+    hits match when their intervals ``distance +- reach`` and their normal arcs
+    ``angle +- alpha`` both overlap; sorted interval ends turn these tests into
+    prefix and suffix unions of bitsets (:class:`~planner.bitsets.IntervalUnions`).
+    R[c, h] holds the g one of whose slots matches a slot of h at least as far
+    down the slot list. Slots near a tie (ends within rounding, or within the
+    cosine test's slack, of another's) and near misses bound their matches from
+    inside and outside and test what lies between one by one (`_match`), as do
+    arcs across the heading.
+    """
     config = config or OutcomeConfig()
     n_paths, n_hyp = outcomes.hit.shape
     slots = _Slots.of(posed, outcomes, sensor)
-    same_class = posed.cls[:, None] == posed.cls[None, :]
-    conf = np.empty((n_paths, n_hyp, n_hyp), dtype=bool)
-    chunk = max(1, config.chunk_elements // max(1, n_hyp * n_hyp))
+    width = n_words(n_hyp)
+    rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
+    chunk = max(1, config.chunk_elements // max(1, SLOTS * n_hyp * width))
     for lo in range(0, n_paths, chunk):
-        # nominal against nominal, for every pair
-        nominal = slots.take(np.s_[lo : lo + chunk], 0)
-        conf[lo : lo + chunk] = same_class | _match(nominal.expand(2), nominal.expand(1))
-    # the uncertain outcomes: alternative k of h against slots 0..k of every g (the
-    # symmetric update covers slot k of g against the alternatives of h below k)
-    for k in range(1, SLOTS):
-        c_idx, h_idx = np.nonzero(outcomes.slot_valid[..., k])
-        per = max(1, config.chunk_elements // max(1, n_hyp * (k + 1)))
-        for lo in range(0, len(c_idx), per):
-            c, h = c_idx[lo : lo + per], h_idx[lo : lo + per]
-            alt = slots.take((c, h), k).expand(1).expand(1)  # (E, 1, 1)
-            other = slots.take(c, slice(0, k + 1))  # (E, H, k + 1)
-            hit = _match(alt, other).any(axis=-1)
-            conf[c, h, :] |= hit
-            conf[c, :, h] |= hit
-    return conf
+        part = slice(lo, min(lo + chunk, n_paths))
+        items = _Items.of(outcomes, slots, part, np.arange(n_hyp) if order is None else order)
+        rows[items.part] = items.rows(posed, width, config.chunk_elements)
+    return rows
+
+
+@dataclass(frozen=True, eq=False)
+class _Items:
+    """The outcome slots of some paths as items (c, SLOTS H), item k = slot k // H
+    of hypothesis k % H: `valid`, `hit`, interval centre `d` (along the path) and
+    half-width `r`, `off` (distance off the path), normal angle `u` from the
+    heading in [0, 2 pi) with half-width `a`, and the `slots` fields (c, SLOTS H)."""
+
+    part: slice
+    valid: np.ndarray
+    hit: np.ndarray
+    d: np.ndarray
+    r: np.ndarray
+    off: np.ndarray
+    u: np.ndarray
+    a: np.ndarray
+    slots: _Slots
+
+    @classmethod
+    def of(cls, o: Outcomes, slots: _Slots, part: slice, order: np.ndarray) -> _Items:
+        n_paths = part.stop - part.start
+        flat = lambda a: np.swapaxes(a[part][:, order], 1, 2).reshape(n_paths, -1)  # noqa: E731
+        hit = flat(o.slot_hit & o.slot_valid)
+        # angles from the path's heading: hit normals face back along it
+        u = np.mod(flat(o.slot_angle) - o.heading[part, None], 2 * math.pi)
+        flat_slots = _Slots(*(flat(getattr(slots, f.name)) for f in fields(_Slots)))
+        off = np.where(hit, np.abs(flat(o.slot_offset)), np.inf)
+        return cls(
+            part,
+            flat(o.slot_valid),
+            hit,
+            flat(o.slot_distance),
+            flat_slots.reach,
+            off,
+            u,
+            flat_slots.alpha,
+            flat_slots,
+        )
+
+    def rows(self, posed: PosedSet, width: int, chunk_elements: int) -> np.ndarray:
+        n_paths, n_items = self.hit.shape
+        n_hyp = n_items // SLOTS
+        owner, slot = np.arange(n_items) % n_hyp, np.arange(n_items) // n_hyp
+        owners = np.broadcast_to(owner, self.hit.shape)
+        # arcs clear of the cut at the heading overlap iff their intervals do
+        clear = (self.u - self.a >= _ANGLE_BAND) & (self.u + self.a <= 2 * math.pi - _ANGLE_BAND)
+        clear &= self.hit & np.isfinite(self.d)
+        d_low, d_high, u_low, u_high = (
+            self.d - self.r,
+            self.d + self.r,
+            self.u - self.a,
+            self.u + self.a,
+        )
+        # near a tie: another slot's interval starts within rounding (distances) or
+        # within the cosine slack (angles) of this one's end
+        band = 1e-13 * posed.scale
+        on_path = clear & (self.off == 0)
+        regular = on_path & ~close_ends(d_low, d_high, on_path, -band, band)
+        regular &= ~close_ends(u_low, u_high, on_path, -1e-12, _ANGLE_BAND)
+        lists = [
+            [
+                IntervalUnions.of(low, high, owners, regular & (slot == j), width)
+                for low, high in ((d_low, d_high), (u_low, u_high))
+            ]
+            for j in range(SLOTS)
+        ]
+        rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
+        # regular slot i of h against the regular slots j <= i: intervals and arcs overlap
+        for i in range(SLOTS):
+            c, k = np.nonzero(regular & (slot == i))
+            for j in range(i + 1):
+                rows[c, owner[k]] |= self._overlaps(lists[j], c, k, 0.0, 0.0)
+        # misses match misses: slot i of h meets every missing slot j <= i of any g
+        miss = (self.valid & ~self.hit).reshape(n_paths, SLOTS, n_hyp)
+        sets = np.bitwise_or.reduce(one_hot(np.where(miss, np.arange(n_hyp), -1), width), axis=2)
+        seen = np.bitwise_or.accumulate(sets, axis=1)  # (c, SLOTS, W)
+        for i in range(SLOTS):
+            c, h = np.nonzero(miss[:, i])
+            rows[c, h] |= seen[c, i]
+        # near ties and near misses against the regular slots: sure matches from
+        # shrunk intervals, and the others of grown intervals confirmed one by one
+        near = clear & ~regular
+        c, k = np.nonzero(near)
+        if len(c):
+            r_min = float(self.r[self.hit].min(initial=0.0))
+            # off the path by x: |p - q|^2 = dd^2 + x^2 <= R^2 holds once |dd| <= R - x^2 / R
+            shrink = np.where(self.off[c, k] > 0, self.off[c, k] ** 2 / (self.r[c, k] + r_min), 0.0)
+            found = np.zeros((len(c), width), dtype=np.uint64)
+            for j in range(SLOTS):
+                sure = self._overlaps(lists[j], c, k, -shrink - 2 * band, -1e-12)
+                maybe = self._overlaps(lists[j], c, k, 2 * band, _ANGLE_BAND) & ~sure
+                found |= sure | self._confirm(c, k, maybe, j)
+            np.bitwise_or.at(rows, (c, owner[k]), found)
+        # arcs across the heading against every hit; near ones against each other
+        crossing = self.hit & ~clear
+        for queries, targets in ((crossing, self.hit), (near, near | crossing)):
+            c, k = np.nonzero(queries)
+            if len(c):
+                found = self._exact(c, k, targets, owner, chunk_elements)
+                np.bitwise_or.at(rows, (c, owner[k]), found)
+        return rows
+
+    def _overlaps(
+        self, lists: list, c: np.ndarray, k: np.ndarray, grow_d: Any, grow_u: Any
+    ) -> np.ndarray:
+        """(E, W) owners of the list's slots whose interval and arc overlap those of
+        item (c, k), its half-widths grown by `grow_d` and `grow_u`."""
+        d, r, u, a = self.d[c, k], self.r[c, k] + grow_d, self.u[c, k], self.a[c, k] + grow_u
+        return lists[0].overlapping(c, d - r, d + r) & lists[1].overlapping(c, u - a, u + a)
+
+    def _confirm(self, c: np.ndarray, k: np.ndarray, maybe: np.ndarray, j: int) -> np.ndarray:
+        """(E, W): the owners g in `maybe` whose slot j `_match`es item (c, k)."""
+        n_hyp = self.hit.shape[1] // SLOTS
+        e, g = np.nonzero(unpack_bits(maybe, n_hyp))
+        ok = np.zeros((len(c), n_hyp), dtype=bool)
+        if len(e):
+            s = self.slots
+            mine = _Slots(*(getattr(s, f.name)[c[e], k[e]] for f in fields(_Slots)))
+            theirs = _Slots(*(getattr(s, f.name)[c[e], j * n_hyp + g] for f in fields(_Slots)))
+            hit = _match(mine, theirs)
+            ok[e[hit], g[hit]] = True
+        return pack_bits(ok)
+
+    def _exact(
+        self, c: np.ndarray, k: np.ndarray, targets: np.ndarray, owner: np.ndarray, chunk: int
+    ) -> np.ndarray:
+        """(E, W) hypotheses one of whose `targets` slots (c, items) matches item (c, k)."""
+        n_hyp = len(owner) // SLOTS
+        at = compact(targets)
+        member = at >= 0
+        path = np.arange(len(targets))[:, None]
+        columns = [getattr(self.slots, f.name) for f in fields(_Slots)]
+        theirs = [col[path, np.maximum(at, 0)] for col in columns]
+        out = np.zeros((len(c), n_words(n_hyp)), dtype=np.uint64)
+        per = max(1, chunk // at.shape[1])
+        for lo in range(0, len(c), per):
+            cc, kk = c[lo : lo + per], k[lo : lo + per]
+            mine = _Slots(*(col[cc, kk, None] for col in columns))
+            e, t = np.nonzero(_match(mine, _Slots(*(col[cc] for col in theirs))) & member[cc])
+            hits = np.zeros((len(cc), n_hyp), dtype=bool)
+            hits[e, owner[at[cc[e], t]]] = True
+            out[lo : lo + per] = pack_bits(hits)
+        return out
 
 
 @dataclass(frozen=True, eq=False)
@@ -422,21 +472,6 @@ class _Slots:
             np.sin(alpha),
         )
 
-    def take(self, rows: Any, k: int | slice | None = None) -> _Slots:
-        """Path rows (a slice or index array) of the (C, H, SLOTS) fields; with `k`,
-        only those slots (and `rows` may be a (paths, hypotheses) index pair)."""
-        if k is None:
-            sel = rows
-        elif isinstance(rows, tuple):
-            sel = (*rows, k)
-        else:
-            sel = (rows, slice(None), k)
-        return _Slots(*(getattr(self, f.name)[sel] for f in fields(self)))
-
-    def expand(self, axis: int) -> _Slots:
-        """Insert a length-one axis at `axis`."""
-        return _Slots(*(np.expand_dims(getattr(self, f.name), axis) for f in fields(self)))
-
 
 def _match(a: _Slots, b: _Slots) -> np.ndarray:
     """Two outcome slots match: both miss, or both hit within the point and normal tolerances."""
@@ -451,47 +486,6 @@ def _match(a: _Slots, b: _Slots) -> np.ndarray:
         near = (dx * dx + dy * dy <= reach * reach) & aligned
     both_hit = a.hit & b.hit & near
     return a.valid & b.valid & ((~a.hit & ~b.hit) | both_hit)
-
-
-@dataclass(frozen=True, eq=False)
-class SurvivorTable:
-    """Survivor sets over K equivalence classes for C paths, as bitsets.
-
-    `bits[c, k]` (W uint64 words, bit j = class j) is S_c(k): the classes that
-    survive path c when the truth is in class k. `weight` (K,) sums to 1.
-    `inseparable` (K, W) marks, for each class, the classes confusable with it
-    on every path (no candidate can tell them apart).
-    """
-
-    bits: np.ndarray
-    weight: np.ndarray
-    inseparable: np.ndarray
-
-    @property
-    def n_paths(self) -> int:
-        return self.bits.shape[0]
-
-    @property
-    def n_classes(self) -> int:
-        return len(self.weight)
-
-    def matrix(self) -> np.ndarray:
-        """(C, K, K) bool: class j survives path c when the truth is class k."""
-        return unpack_bits(self.bits, self.n_classes)
-
-    @classmethod
-    def from_matrix(cls, confusable: np.ndarray, weight: np.ndarray) -> SurvivorTable:
-        """Build from a (C, K, K) boolean matrix (made reflexive) and class weights."""
-        conf = np.array(confusable, dtype=bool)
-        if conf.ndim != 3 or conf.shape[1] != conf.shape[2]:
-            raise PlannerError("must have shape (paths, classes, classes)", field="confusable")
-        k = conf.shape[1]
-        conf[:, np.arange(k), np.arange(k)] = True
-        w = np.asarray(weight, dtype=float)
-        if w.shape != (k,) or not np.all(w >= 0) or w.sum() <= 0:
-            raise PlannerError("must be K weights >= 0 with a positive sum", field="weight")
-        inseparable = np.asarray(conf.all(axis=0)) if len(conf) else np.ones((k, k), dtype=bool)
-        return cls(bits=pack_bits(conf), weight=w / w.sum(), inseparable=pack_bits(inseparable))
 
 
 def survivor_table(posed: PosedSet, confusable: np.ndarray) -> SurvivorTable:

@@ -34,7 +34,11 @@ class PlannedPath:
     `family` is one of distinguishing, informative, partial, uninformative;
     `expected_remaining` the expected number of touches still needed if this
     path is taken, itself included (None when unknown, e.g. before any contact;
-    a lower bound when the plan is `truncated`); `motion_cost` the arc along
+    a lower bound when the plan is `truncated`): ``lookahead`` searches it
+    `depth` touches deep (``optimal``: to the end on small sets); the other
+    strategies search it `depth` deep only on small sets (at most
+    `optimal_max_classes` classes) and otherwise give the one-touch bound, a
+    lower bound of the deeper value; `motion_cost` the arc along
     the safe circle from the sensor plus the expected approach length;
     `source` where the candidate came from (opening, probe, random, window,
     intersection, boundary, extra)."""

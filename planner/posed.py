@@ -1,4 +1,5 @@
-"""Hypotheses moved into the world frame as padded face arrays (DESIGN §2 "posed outline").
+"""Hypotheses moved into the world frame as padded face arrays (DESIGN §2 "posed outline"),
+and sensing paths cast against them (DESIGN §4.11).
 
 A hypothesis' posed outline is ``pose.apply(stable_pose.outline)`` (holes
 likewise); here every hypothesis' faces are stacked into (H, F) arrays, padded
@@ -15,10 +16,10 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.geometry import rotation_matrices
+from planner.geometry import rotation_matrices, wrap_angle
 from planner.types import Hypothesis, ObjectModel
 
-__all__ = ["PosedSet", "contains_points", "pose_hypotheses"]
+__all__ = ["PosedSet", "cast_paths", "contains_points", "pose_hypotheses", "segment_distance"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -107,13 +108,6 @@ def pose_hypotheses(
         raise PlannerError("probabilities must sum to a positive number", field="hypotheses")
     weight = weight / total
     class_ids, cls = np.unique([h.equivalence_class for h in hypotheses], return_inverse=True)
-    rings = tuple(
-        (
-            h.pose.apply(poses[model_of[i]].outline),
-            tuple(h.pose.apply(hole) for hole in poses[model_of[i]].holes),
-        )
-        for i, h in enumerate(hypotheses)
-    )
     return PosedSet(
         start=start,
         end=end,
@@ -128,8 +122,24 @@ def pose_hypotheses(
         cls=cls,
         class_ids=class_ids,
         class_weight=np.bincount(cls, weights=weight, minlength=len(class_ids)),
-        rings=rings,
+        rings=_rings(poses, model_of, rot, shift),
     )
+
+
+def _rings(poses: list, model_of: np.ndarray, rot: np.ndarray, shift: np.ndarray) -> tuple:
+    """Each hypothesis' posed outline and holes, the hypotheses of one stable pose
+    moved together."""
+    out: list = [None] * len(model_of)
+    for m, pose in enumerate(poses):
+        mine = np.flatnonzero(model_of == m)
+        # v_world = v_model R(theta)^T + t, as Pose.apply
+        moved = [
+            np.asarray(ring, dtype=float)[None] @ np.swapaxes(rot[mine], -1, -2) + shift[mine, None]
+            for ring in (pose.outline, *pose.holes)
+        ]
+        for k, i in enumerate(mine):
+            out[i] = (moved[0][k], tuple(ring[k] for ring in moved[1:]))
+    return tuple(out)
 
 
 def contains_points(posed: PosedSet, points: np.ndarray) -> np.ndarray:
@@ -146,6 +156,267 @@ def contains_points(posed: PosedSet, points: np.ndarray) -> np.ndarray:
         )
     crossing = straddle & (q[..., 0] < x_cross) & posed.valid[None]
     return (np.count_nonzero(crossing, axis=-1) % 2) == 1
+
+
+def segment_distance(
+    px: np.ndarray, py: np.ndarray, ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray
+) -> np.ndarray:
+    """Distance from points p to segments [a, b], x and y given apart (broadcast);
+    the same arithmetic as :func:`planner.geometry.point_segment_distance`."""
+    ex, ey = bx - ax, by - ay
+    sq = np.maximum(ex * ex + ey * ey, 1e-300)
+    # closest point a + u (b - a), u = clip((p - a).(b - a) / |b - a|^2, 0, 1)
+    u = np.clip(((px - ax) * ex + (py - ay) * ey) / sq, 0.0, 1.0)
+    return np.hypot(px - (ax + u * ex), py - (ay + u * ey))
+
+
+def cast_paths(
+    posed: PosedSet,
+    origins: np.ndarray,
+    directions: np.ndarray,
+    lengths: np.ndarray,
+    tolerances: tuple[np.ndarray, np.ndarray, np.ndarray],
+    chunk_elements: int = 1_000_000,
+) -> dict[str, np.ndarray]:
+    """Cast C paths (world frame: origins (C, 2), unit directions (C, 2), lengths
+    (C,)) against every posed hypothesis, chunked over the paths: the fields of
+    :class:`planner.outcomes.Outcomes`. `tolerances` (each (H,)) are how far the
+    true outline may lie from the posed one, the vertex zone, and the sine of the
+    grazing angle."""
+    n_paths, (n_hyp, n_faces) = len(origins), posed.valid.shape
+    faces = _Faces.of(posed, tolerances)
+    chunk = max(1, chunk_elements // max(1, n_hyp * n_faces))
+    bounds = [(i, i + chunk) for i in range(0, n_paths, chunk)] or [(0, 0)]
+    parts = [_outcome_chunk(faces, origins[a:b], directions[a:b], lengths[a:b]) for a, b in bounds]
+    return {k: np.concatenate([part[k] for part in parts]) for k in parts[0]}
+
+
+@dataclass(frozen=True, eq=False)
+class _Faces:
+    """Posed faces as separate x and y arrays (H, F), the tolerances (H,) and each
+    outline's bounding circle (`centre_x`, `centre_y`, `radius`, (H,))."""
+
+    sx: np.ndarray
+    sy: np.ndarray
+    ex: np.ndarray
+    ey: np.ndarray
+    nx: np.ndarray
+    ny: np.ndarray
+    length: np.ndarray
+    prev: np.ndarray
+    next: np.ndarray
+    valid: np.ndarray
+    geometric: np.ndarray
+    vertex_tol: np.ndarray
+    graze_sin: np.ndarray
+    centre_x: np.ndarray
+    centre_y: np.ndarray
+    radius: np.ndarray
+    margin: float
+
+    @classmethod
+    def of(cls, posed: PosedSet, tol: tuple[np.ndarray, np.ndarray, np.ndarray]) -> _Faces:
+        count = np.maximum(posed.valid.sum(axis=1), 1)
+        centre = np.where(posed.valid[..., None], posed.start, 0.0).sum(axis=1) / count[:, None]
+        # every point of a face lies within the largest vertex distance of the centre
+        reach = np.hypot(*np.moveaxis(posed.start - centre[:, None, :], -1, 0))
+        radius = np.where(posed.valid, reach, 0.0).max(axis=1)
+        return cls(
+            sx=np.ascontiguousarray(posed.start[..., 0]),
+            sy=np.ascontiguousarray(posed.start[..., 1]),
+            ex=np.ascontiguousarray(posed.end[..., 0]),
+            ey=np.ascontiguousarray(posed.end[..., 1]),
+            nx=np.ascontiguousarray(posed.normal[..., 0]),
+            ny=np.ascontiguousarray(posed.normal[..., 1]),
+            length=posed.length,
+            prev=posed.prev,
+            next=posed.next,
+            valid=posed.valid,
+            geometric=tol[0],
+            vertex_tol=tol[1],
+            graze_sin=tol[2],
+            centre_x=centre[:, 0],
+            centre_y=centre[:, 1],
+            radius=radius,
+            margin=1e-9 * posed.scale,
+        )
+
+
+def _angle_cone(
+    ax: np.ndarray, ay: np.ndarray, bx: np.ndarray, by: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Centre angle and half-width (radians) of the shorter arc between unit normals a, b."""
+    ang_a = np.arctan2(ay, ax)
+    diff = wrap_angle(np.arctan2(by, bx) - ang_a)
+    return wrap_angle(ang_a + diff / 2), np.abs(diff) / 2
+
+
+def _outcome_chunk(
+    fc: _Faces, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray
+) -> dict[str, np.ndarray]:
+    n_hyp = len(fc.valid)
+    ox, oy = origins[:, 0, None, None], origins[:, 1, None, None]
+    dx, dy = directions[:, 0, None, None], directions[:, 1, None, None]
+    length = lengths[:, None]
+    edge_x, edge_y = fc.ex - fc.sx, fc.ey - fc.sy
+    # o + t d meets s + u (e - s) at t = (w x e)/(d x e), u = (w x d)/(d x e), with w = s - o
+    denom = dx * edge_y - dy * edge_x
+    wx, wy = fc.sx - ox, fc.sy - oy
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        t = (wx * edge_y - wy * edge_x) / denom
+        u = (wx * dy - wy * dx) / denom
+    meets = fc.valid & (np.abs(denom) > 1e-12 * fc.length)
+    meets &= (t >= 0) & (t <= length[..., None]) & (u >= 0) & (u <= 1)
+    t = np.where(meets, t, np.inf)
+    face = np.argmin(t, axis=-1)
+    dist = np.take_along_axis(t, face[..., None], axis=-1)[..., 0]
+    hit = np.isfinite(dist)
+    face = np.where(hit, face, -1)
+    f = np.maximum(face, 0)
+    rows = np.broadcast_to(np.arange(n_hyp), f.shape)
+    dx, dy = dx[..., 0], dy[..., 0]
+    reached = np.where(hit, dist, 0.0)
+    px, py = origins[:, 0, None] + reached * dx, origins[:, 1, None] + reached * dy
+    nx, ny = fc.nx[rows, f], fc.ny[rows, f]
+    cos_in = np.abs(dx * nx + dy * ny)
+    geometric, vertex_tol, graze_sin = fc.geometric, fc.vertex_tol, fc.graze_sin
+
+    # vertex: the contact lies within the vertex zone of one end of the face hit
+    u_hit = np.clip(np.take_along_axis(u, f[..., None], axis=-1)[..., 0], 0.0, 1.0)
+    face_len = fc.length[rows, f]
+    to_start, to_end = u_hit * face_len, (1 - u_hit) * face_len
+    vertex = hit & (np.minimum(to_start, to_end) <= vertex_tol)
+    adjacent = np.where(to_start <= to_end, fc.prev[rows, f], fc.next[rows, f])
+    adj_x, adj_y = fc.nx[rows, adjacent], fc.ny[rows, adjacent]
+    grazing = hit & (cos_in < graze_sin)
+    # a face displaced by delta moves the contact along the path by delta / |cos|
+    along = geometric / np.maximum(cos_in, graze_sin)
+    end_of_path = hit & (dist > length - along)
+    facing_away = dx * adj_x + dy * adj_y > -graze_sin
+    slip = (vertex & facing_away) | grazing | end_of_path
+    slip_hit, slip_dist, slip_angle = _slip(fc, t, slip, end_of_path, px, py, dx, dy)
+    near_miss, near_x, near_y, m_centre, m_spread = _near_miss(
+        fc, origins, directions, lengths, hit
+    )
+
+    # a near miss's closest approach: how far along the path, and how far off it
+    rel_x, rel_y = near_x - origins[:, 0, None], near_y - origins[:, 1, None]
+    along_near, off_near = rel_x * dx + rel_y * dy, dx * rel_y - dy * rel_x
+
+    # outcome slots
+    nan = np.full(hit.shape, np.nan)
+    angle0 = np.arctan2(ny, nx)
+    v_centre, v_spread = _angle_cone(nx, ny, adj_x, adj_y)
+    zero = np.zeros_like(angle0)
+    slack = np.where(hit, along - geometric, 0.0)
+    hit_x, hit_y = np.where(hit, px, nan), np.where(hit, py, nan)
+    slip_x = np.where(slip_hit, origins[:, 0, None] + slip_dist * dx, nan)
+    slip_y = np.where(slip_hit, origins[:, 1, None] + slip_dist * dy, nan)
+    slot_x = np.stack([hit_x, np.where(vertex, px, near_x), slip_x], axis=-1)
+    slot_y = np.stack([hit_y, np.where(vertex, py, near_y), slip_y], axis=-1)
+    return {
+        "hit": hit,
+        "distance": dist,
+        "point": np.stack([hit_x, hit_y], axis=-1),
+        "normal": np.stack([np.where(hit, nx, nan), np.where(hit, ny, nan)], axis=-1),
+        "face": face,
+        "travel": np.where(hit, dist, length),
+        "vertex": vertex,
+        "grazing": grazing,
+        "near_miss": near_miss,
+        "end_of_path": end_of_path,
+        "slot_valid": np.stack([np.ones_like(hit), vertex | near_miss, slip], axis=-1),
+        "slot_hit": np.stack([hit, vertex | near_miss, slip_hit], axis=-1),
+        "slot_point": np.stack([slot_x, slot_y], axis=-1),
+        "slot_angle": np.stack(
+            [angle0, np.where(vertex, v_centre, m_centre), np.where(slip, slip_angle, 0.0)],
+            axis=-1,
+        ),
+        "slot_spread": np.stack([zero, np.where(vertex, v_spread, m_spread), zero], axis=-1),
+        "slot_slack": np.stack([slack, np.where(vertex, slack, 0.0), zero], axis=-1),
+        "slot_distance": np.stack(
+            [
+                np.where(hit, dist, nan),
+                np.where(vertex, dist, along_near),
+                np.where(slip_hit, slip_dist, nan),
+            ],
+            axis=-1,
+        ),
+        "slot_offset": np.stack([zero, np.where(vertex, 0.0, off_near), zero], axis=-1),
+        "heading": np.arctan2(directions[:, 1], directions[:, 0]),
+    }
+
+
+def _slip(
+    fc: _Faces,
+    t: np.ndarray,
+    slip: np.ndarray,
+    end_of_path: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Where the path may slip past the contact (`slip`, (c, H)): does it hit again
+    further on, how far along the path, and the normal angle there."""
+    c, h = np.nonzero(slip)
+    # past the contact the path is outside the object: only faces turned toward it
+    # count, and none within the vertex zone of the contact
+    near_contact = (
+        segment_distance(px[c, h, None], py[c, h, None], fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h])
+        <= fc.vertex_tol[h, None]
+    )
+    facing = dx[c, 0, None] * fc.nx[h] + dy[c, 0, None] * fc.ny[h] < 0
+    t_slip = np.where(near_contact | ~facing, np.inf, t[c, h])
+    slip_face = np.argmin(t_slip, axis=-1)
+    dist = np.full(slip.shape, np.inf)
+    dist[c, h] = np.take_along_axis(t_slip, slip_face[:, None], axis=-1)[:, 0]
+    angle = np.zeros(slip.shape)
+    angle[c, h] = np.arctan2(fc.ny[h, slip_face], fc.nx[h, slip_face])
+    slip_hit = slip & np.isfinite(dist) & ~end_of_path
+    return slip_hit, np.where(slip_hit, dist, 0.0), angle
+
+
+def _near_miss(
+    fc: _Faces, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, hit: np.ndarray
+) -> tuple[np.ndarray, ...]:
+    """Misses passing within `geometric` of an outline: (flag, closest outline point x
+    and y, centre and half-width of the normals there), each (c, H)."""
+    ex_r = origins[:, 0] + directions[:, 0] * lengths
+    ey_r = origins[:, 1] + directions[:, 1] * lengths
+    ox, oy = origins[:, 0, None], origins[:, 1, None]
+    # a miss can only pass near the outline if it passes near its bounding circle
+    to_centre = segment_distance(fc.centre_x, fc.centre_y, ox, oy, ex_r[:, None], ey_r[:, None])
+    c, h = np.nonzero(~hit & (to_centre - fc.radius <= fc.geometric + fc.margin))
+    ox, oy, rx, ry = ox[c], oy[c], ex_r[c, None], ey_r[c, None]
+    sx, sy, ex, ey = fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h]
+    # the closest approach of two segments involves an endpoint of one of them
+    d_start = segment_distance(sx, sy, ox, oy, rx, ry)
+    d_end = segment_distance(ex, ey, ox, oy, rx, ry)
+    d_ray = segment_distance(rx, ry, sx, sy, ex, ey)
+    gap = np.where(fc.valid[h], np.minimum(np.minimum(d_start, d_end), d_ray), np.inf)
+    near_face = np.argmin(gap, axis=-1)[:, None]
+    pick = lambda a: np.take_along_axis(a, near_face, axis=-1)[:, 0]  # noqa: E731
+    close = pick(gap) <= fc.geometric[h]
+    which = np.argmin(np.stack([pick(d_start), pick(d_end), pick(d_ray)]), axis=0)
+    nf = near_face[:, 0]
+    x0, y0, x1, y1 = fc.sx[h, nf], fc.sy[h, nf], fc.ex[h, nf], fc.ey[h, nf]
+    ux, uy = x1 - x0, y1 - y0
+    proj = np.clip(
+        ((rx[:, 0] - x0) * ux + (ry[:, 0] - y0) * uy) / np.maximum(ux * ux + uy * uy, 1e-300),
+        0.0,
+        1.0,
+    )
+    # at a vertex of the face the normal may be either face's; on the face, its own
+    px = np.where(which == 0, x0, np.where(which == 1, x1, x0 + proj * ux))
+    py = np.where(which == 0, y0, np.where(which == 1, y1, y0 + proj * uy))
+    other = np.where(which == 0, fc.prev[h, nf], fc.next[h, nf])
+    other = np.where(which == 2, nf, other)
+    centre, spread = _angle_cone(fc.nx[h, nf], fc.ny[h, nf], fc.nx[h, other], fc.ny[h, other])
+    out = [np.zeros(hit.shape, dtype=bool), *(np.full(hit.shape, np.nan) for _ in range(4))]
+    for target, value in zip(out, (close, px, py, centre, spread), strict=True):
+        target[c, h] = value
+    return tuple(out)
 
 
 def _extent(points: np.ndarray) -> float:

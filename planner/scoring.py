@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.bitsets import pack_bits, popcount, weighted_count
 from planner.geometry import wrap_angle
 from planner.outcomes import SurvivorTable
 from planner.search import Deadline, SearchResult, expected_remaining, state_value
@@ -80,22 +81,25 @@ def family_codes(p_distinguishing: np.ndarray, p_informative: np.ndarray) -> np.
 
 
 def information_scores(table: SurvivorTable, state: np.ndarray | None = None) -> InformationScores:
-    """P(DM), P(informative), expected pruning and family of every path, in one pass.
+    """P(DM), P(informative), expected pruning and family of every path, in one pass
+    over the survivor bitsets.
 
     `state` (bool over classes, default all) restricts the hypothesis set S;
     weights are conditional on S.
     """
-    conf = table.matrix()
     in_state = np.ones(table.n_classes, bool) if state is None else np.asarray(state, bool)
-    conf = conf[:, in_state][:, :, in_state]
+    state_bits = pack_bits(in_state)
+    sets = table.bits[:, in_state] & state_bits
     w = table.weight[in_state]
     w = w / w.sum() if w.sum() > 0 else np.full(len(w), 1 / max(len(w), 1))
+    w_all = np.zeros(table.n_classes)
+    w_all[in_state] = w
     # w(S_P(h)): probability mass surviving truth h
-    surviving = conf.astype(float) @ w
+    surviving = weighted_count(sets, w_all)
     # p_distinguishing(P) = sum_h w(h) [S_P(h) within the class of h]
-    p_dm = (conf.sum(axis=-1) == 1).astype(float) @ w
+    p_dm = (popcount(sets) == 1).astype(float) @ w
     # p_informative(P) = sum_h w(h) [S_P(h) != S]
-    p_inf = (~conf.all(axis=-1)).astype(float) @ w
+    p_inf = np.any(sets != state_bits, axis=-1).astype(float) @ w
     # expected pruning = sum_h w(h) (1 - w(S_P(h)))
     pruning = (1.0 - surviving) @ w
     return InformationScores(p_dm, p_inf, np.clip(pruning, 0.0, 1.0), family_codes(p_dm, p_inf))

@@ -40,6 +40,11 @@ from planner.outcomes import SurvivorTable
 
 __all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value"]
 
+#: Children of one path evaluated together one touch deep, and the most words
+#: (paths x members x words) one batch of them may take.
+_BATCH = 64
+_BATCH_ELEMENTS = 2_000_000
+
 
 class _OutOfTimeError(Exception):
     """Raised inside the search when the deadline passes."""
@@ -97,53 +102,71 @@ class _Search:
         self.n = table.n_classes
         self.inseparable = table.inseparable
         self.separable = ~unpack_bits(table.inseparable, self.n)
+        self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
+        self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
+        self.near, self.near_apart = _neighbourhoods(~self.separable)
         self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
         self.one_word = self.bits.shape[-1] == 1
-        self.bits1 = self.bits[..., 0]  # the only word when one_word
         self.deadline = deadline
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
         self.states = 0
 
-    def settled(self, sets: np.ndarray, idx: np.ndarray, truth: np.ndarray | None = None) -> Any:
-        """(...) bool: which sets (..., W) within the classes idx no path can split.
+    def settled(self, state: np.ndarray, idx: np.ndarray) -> bool:
+        """Can no path split the set `state` (W,) of the classes `idx`?"""
+        if len(idx) <= 1:
+            return True
+        if not self.any_inseparable or np.any(state & self.apart[idx[0]] != 0):
+            return False
+        return bool(self._clique(state[None], idx[:1])[0])
 
-        `truth` (..., class index) names a member of each set: a settled set lies
-        within that member's inseparable classes, a cheap first filter.
-        """
-        if sets.ndim == 1:
-            one = None if truth is None else np.asarray(truth)[None]
-            return bool(self.settled(sets[None], idx, one)[0])
-        single = popcount(sets) <= 1
-        if not self.any_inseparable:
-            return single
-        maybe = ~single
-        if truth is not None:
-            outside = sets & ~self.inseparable[truth]
-            maybe &= ~np.any(outside != 0, axis=-1)
-        out = single.copy()
-        if maybe.any():
-            member = unpack_bits(sets[maybe], self.n)[..., idx].astype(np.float32)
-            apart = self.separable[np.ix_(idx, idx)].astype(np.float32)
-            # settled iff no two members j, l are separable: m^T A m == 0
-            out[maybe] = np.einsum("...j,...j->...", member @ apart, member) == 0
-        return out
+    def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
+        inseparable from idx[i], pairwise inseparable? Tested on each class's few
+        inseparable neighbours, as bit masks over them."""
+        if self.near is None or self.near_apart is None:  # too many neighbours for a word
+            member = unpack_bits(group, self.n).astype(np.float32)
+            # pairwise inseparable iff m^T A m == 0, A the separable pairs
+            return np.einsum("nj,nj->n", member @ self.separable.astype(np.float32), member) == 0
+        near, near_apart = self.near[idx], self.near_apart[idx]  # (m, G), (m, G)
+        at = np.maximum(near, 0)
+        word = np.take_along_axis(group, at // 64, axis=1)
+        inside = ((word >> (at % 64).astype(np.uint64)) & np.uint64(1)).astype(bool) & (near >= 0)
+        local = np.bitwise_or.reduce(
+            np.where(
+                inside,
+                np.left_shift(np.uint64(1), np.arange(near.shape[1], dtype=np.uint64)),
+                np.uint64(0),
+            ),
+            axis=1,
+        )
+        return ~np.any(inside & ((near_apart & local[:, None]) != 0), axis=1)
 
-    def expand(self, state: np.ndarray, idx: np.ndarray) -> _Node:
+    def expand(self, state: np.ndarray, idx: np.ndarray, paths: Any = slice(None)) -> _Node:
+        """The node of state S (classes idx): its children over `paths` (default all)."""
         self.states += 1
         w = self.weight[idx]
         w = w / w.sum() if w.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
+        bits = self.bits[paths]
         if self.one_word and not self.any_inseparable:
             # fast path: one word per set; a set x is a single class iff x & (x - 1) == 0
-            word = self.bits1[:, idx] & state[0]
+            word = bits[:, idx, 0] & state[0]
             stay = word == state[0]
             open_ = ~stay & ((word & (word - np.uint64(1))) != 0)
             child = word[..., None]
         else:
-            child = self.bits[:, idx, :] & state
-            stay = np.all(child == state, axis=-1)
-            truth = np.broadcast_to(idx, stay.shape)
-            open_ = ~stay & ~self.settled(child, idx, truth)
+            child = bits[:, idx, :] & state
+            # S_P(h) & S lies within S: it is S when it has as many members
+            count = popcount(child)
+            stay = count == len(idx)
+            settled = count <= 1
+            if self.any_inseparable:
+                # S_P(h) & S always holds the classes inseparable from h; it is settled
+                # when it holds no more (as many members) and those are pairwise inseparable
+                group = self.inseparable[idx] & state
+                size = popcount(group)
+                settled |= (count == size) & self._clique(group, idx)
+            open_ = ~stay & ~settled
         w_stay = stay.astype(float) @ w
         informative = w_stay < 1 - 1e-12
         bound = np.full(len(child), np.inf)
@@ -163,7 +186,7 @@ class _Search:
         if depth is not None and (key, depth) in self.limited:
             return self.limited[key, depth]
         idx = np.flatnonzero(unpack_bits(state, self.n))
-        if len(idx) <= 1 or self.settled(state, idx):
+        if self.settled(state, idx):
             self.exact[key] = 0.0
             return 0.0
         if depth == 0:
@@ -196,13 +219,99 @@ class _Search:
         denom = 1.0 - node.w_stay[c]
         rest = float(node.weight[ks].sum())
         total = 1.0
-        for k in ks:
-            # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
-            total += node.weight[k] * self.value(node.child[c, k], depth)
-            rest -= node.weight[k]
-            if (total + rest) / denom >= cutoff:
-                return (total + rest) / denom, False
+        # leaves of the children (depth 1): batches of states at once, growing from
+        # one so that a path cut off early costs little
+        step = 1 if depth == 1 else max(len(ks), 1)
+        for lo in _batches(len(ks), step):
+            part = ks[lo[0] : lo[1]]
+            if depth == 1:
+                values = self.values_one(node.child[c, part])
+            for i, k in enumerate(part):
+                value = values[i] if depth == 1 else self.value(node.child[c, k], depth)
+                # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
+                total += node.weight[k] * value
+                rest -= node.weight[k]
+                if (total + rest) / denom >= cutoff:
+                    return (total + rest) / denom, False
         return total / denom, True
+
+    def values_one(self, sets: np.ndarray) -> np.ndarray:
+        """E(T) searched one touch deep for each set T (n, W), memoized: the best
+        bound min_P (1 + w(open | T)) / (1 - w(stay | T)), or 0 if T is settled."""
+        self.deadline.check()
+        out = np.empty(len(sets))
+        missing = []
+        for i, state in enumerate(sets):
+            key = state.tobytes()
+            known = self.exact.get(key, self.limited.get((key, 1)))
+            if known is None:
+                missing.append(i)
+            else:
+                out[i] = known
+        if missing:
+            todo = sets[missing]
+            found = np.empty(len(todo))
+            size = popcount(todo)
+            # similar sizes together, each batch padded to its largest set and kept
+            # within _BATCH_ELEMENTS words
+            order = np.argsort(size, kind="stable")
+            budget = max(1, _BATCH_ELEMENTS // (self.bits.shape[0] * self.bits.shape[-1]))
+            lo = 0
+            while lo < len(order):
+                hi = lo + 1
+                while hi < len(order) and (hi + 1 - lo) * size[order[hi]] <= budget:
+                    hi += 1
+                pick = order[lo:hi]
+                m = int(size[pick].max())
+                # members of each set, padded with -1 (one row per set)
+                members = np.argsort(~unpack_bits(todo[pick], self.n), axis=1, kind="stable")
+                idx = np.where(np.arange(m) < size[pick][:, None], members[:, :m], -1)
+                settled = self._settled_many(todo[pick], idx)
+                found[pick] = np.where(settled, 0.0, self._bound_one(todo[pick], idx))
+                lo = hi
+            out[missing] = found
+            for state, v, m in zip(todo, found, size, strict=True):
+                # one touch deep is the exact value for sets of at most two classes
+                if v == 0.0 or m <= 2:
+                    self.exact[state.tobytes()] = float(v)
+                else:
+                    self.limited[state.tobytes(), 1] = float(v)
+        return out
+
+    def _settled_many(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(n,) bool: which sets (n, W) with members idx (n, M) no path can split."""
+        single = popcount(sets) <= 1
+        if not self.any_inseparable:
+            return single
+        first = np.maximum(idx[:, 0], 0)
+        inside = ~np.any(sets & self.apart[first] != 0, axis=-1)
+        return single | (inside & self._clique(sets, first))
+
+    def _bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(n,) min over paths of the one-touch bound of each set T (n, W) with
+        members idx (n, M) (-1 = padding): `expand(T).bound.min()` for a batch."""
+        self.states += len(sets)
+        real = idx >= 0
+        g = np.maximum(idx, 0)
+        w = np.where(real, self.weight[g], 0.0)
+        total = w.sum(axis=1, keepdims=True)
+        # w(h|T), uniform when T weighs nothing
+        w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
+        # |S_P(h) & T| for every member h and path P: (n, M, C)
+        count = popcount(self.by_class[g] & sets[:, None, None, :])
+        stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
+        settled = count <= 1
+        if self.any_inseparable:
+            group = self.inseparable[g] & sets[:, None, :]
+            clique = self._clique(group.reshape(-1, group.shape[-1]), g.reshape(-1))
+            settled |= (count == popcount(group)[..., None]) & clique.reshape(g.shape)[..., None]
+        open_ = ~stay & ~settled & real[..., None]
+        w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
+        w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
+        informative = w_stay < 1 - 1e-12
+        # E_P(T) >= (1 + sum_{open children} w(h|T)) / (1 - w_stay)
+        bound = (1.0 + w_open) / np.where(informative, 1.0 - w_stay, 1.0)
+        return np.where(informative, bound, np.inf).min(axis=1)
 
     def rank(
         self,
@@ -216,16 +325,18 @@ class _Search:
         value = np.full(n_paths, np.inf)
         exact = np.zeros(n_paths, dtype=bool)
         idx = np.flatnonzero(unpack_bits(state, self.n))
-        if len(idx) <= 1 or self.settled(state, idx):
+        if self.settled(state, idx):
             value[paths], exact[paths] = 0.0, True
+            return SearchResult(value, exact, False, self.states)
+        if depth == 1:
+            # E_P(S) one touch deep is the bound itself: only the paths asked for
+            value[paths] = self.expand(state, idx, paths).bound
+            exact[paths] = True
             return SearchResult(value, exact, False, self.states)
         node = self.expand(state, idx)
         value[paths] = node.bound[paths]
         uninformative = paths[~np.isfinite(node.bound[paths])]
         exact[uninformative] = True
-        if depth == 1:
-            exact[paths] = True
-            return SearchResult(value, exact, False, self.states)
         child_depth = None if depth is None else depth - 1
         live = paths[np.isfinite(node.bound[paths])]
         order = live[np.argsort(node.bound[live] + extra[live], kind="stable")]
@@ -245,6 +356,33 @@ class _Search:
                 exact[c] = True
                 bisect.insort(best, v + extra[c])
         return SearchResult(value, exact, truncated, self.states)
+
+
+def _neighbourhoods(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
+    G-bit masks over that list, which of them are separable from each (K, G);
+    (None, None) when some class has more than 64 inseparable classes."""
+    size = together.sum(axis=1)
+    width = int(size.max(initial=1))
+    if width > 64:
+        return None, None
+    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
+    ok = np.take_along_axis(together, order, axis=1)
+    near = np.where(ok, order, -1)
+    at = np.maximum(near, 0)
+    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
+    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
+    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)
+
+
+def _batches(n: int, first: int) -> list[tuple[int, int]]:
+    """[lo, hi) ranges covering range(n), each twice as long as the one before
+    (up to `_BATCH`)."""
+    out, lo, size = [], 0, first
+    while lo < n:
+        out.append((lo, min(n, lo + size)))
+        lo, size = lo + size, min(2 * size, max(_BATCH, first))
+    return out
 
 
 def _full_state(table: SurvivorTable, state: np.ndarray | None) -> np.ndarray:

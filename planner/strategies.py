@@ -33,11 +33,10 @@ from planner.outcomes import (
     Outcomes,
     PosedSet,
     SurvivorTable,
-    confusability,
+    class_bits,
     generate_candidates,
     pose_hypotheses,
     predict_outcomes,
-    survivor_table,
 )
 from planner.plans import Plan, PlannedPath, opening_path
 from planner.probes import opening_probe, strategy_paths
@@ -74,11 +73,17 @@ __all__ = [
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
 
+#: Fewest candidates per block when a time budget splits the outcome passes.
+_BLOCK = 64
+
 
 @dataclass(frozen=True)
 class StrategyConfig:
     """How to plan: strategy `name`, lookahead `depth` (touches), `budget_ms`
-    (None: unlimited), `optimal_max_classes`, `max_paths` in the ranked list,
+    (None: unlimited; it covers the whole plan: candidates, outcomes, search),
+    `optimal_max_classes` (the most classes ``optimal`` solves exactly, and the
+    most for which strategies that do not search still score their paths `depth`
+    touches deep), `max_paths` in the ranked list,
     `motion_weight` (touches per unit of motion length in the combined
     objective; 0 = motion only breaks ties), `random_draws` (origins drawn at
     once by ``random``), `grid_size` (B of the thesis' B x B grid), and the
@@ -135,7 +140,8 @@ class Analysis:
     """Everything known about the candidates before a strategy chooses.
 
     `posed` hypotheses, `candidates` (C paths), their `outcomes`, the class
-    survivor `table`, the information scores `info` and `motion` cost (C,)."""
+    survivor `table`, the information scores `info` and `motion` cost (C,);
+    `truncated` when the time budget left candidates out."""
 
     posed: PosedSet
     candidates: Candidates
@@ -143,6 +149,7 @@ class Analysis:
     table: SurvivorTable
     info: InformationScores
     motion: np.ndarray
+    truncated: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -178,9 +185,13 @@ def analyse(
     *,
     observations: Sequence[Observation] = (),
     extra_paths: Sequence[SensingPath] = (),
+    deadline: Deadline | None = None,
 ) -> Analysis:
     """Candidates (the strategy's own first, then `extra_paths`, then the general
-    set), their predicted outcomes, survivor sets and scores (world frame)."""
+    set), their predicted outcomes, survivor sets and scores (world frame).
+
+    With a `deadline`, outcomes are worked out block by block of candidates and
+    stop (`truncated`) once it passes; the first block is always done."""
     config = config or StrategyConfig()
     gen = _rng(rng)
     by_name = _models(models)
@@ -198,12 +209,29 @@ def analyse(
         sensor_position=sensor_position,
         extra=Candidates.concat([own, Candidates.from_paths(list(extra_paths))]),
     )
-    outcomes = predict_outcomes(
-        posed, cands.origins, cands.directions, cands.lengths, sensor, config.outcome
-    )
-    table = survivor_table(posed, confusability(posed, outcomes, sensor, config.outcome))
-    motion = motion_cost(cands.origins, outcomes.travel @ posed.weight, workspace, sensor_position)
-    return Analysis(posed, cands, outcomes, table, information_scores(table), motion)
+    outcomes: list[Outcomes] = []
+    bits: list[np.ndarray] = []
+    deadline = deadline or Deadline()
+    # anytime: candidates in blocks, best first (the strategy's own, extra, general);
+    # when the budget runs out, the blocks done so far are the candidates
+    block = len(cands) if deadline.end == np.inf else max(_BLOCK, -(-len(cands) // 4))
+    for lo in range(0, max(len(cands), 1), max(block, 1)):
+        if outcomes and deadline.expired():
+            break
+        part = cands.subset(np.arange(lo, min(lo + block, len(cands))))
+        outcomes.append(
+            predict_outcomes(
+                posed, part.origins, part.directions, part.lengths, sensor, config.outcome
+            )
+        )
+        bits.append(class_bits(posed, outcomes[-1], sensor, config.outcome))
+    found = Outcomes.concat(outcomes)
+    truncated = len(found.hit) < len(cands)
+    cands = cands.subset(np.arange(len(found.hit)))
+    table = SurvivorTable.from_bits(np.concatenate(bits), posed.class_weight)
+    motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
+    info = information_scores(table)
+    return Analysis(posed, cands, found, table, info, motion, truncated)
 
 
 def rank_candidates(
@@ -222,7 +250,10 @@ def rank_candidates(
     (``random`` draws and thesis ``probe``/``window`` rows are what those
     strategies pick from); `deadline` bounds the search. Expected remaining
     touches are computed for the first `max_paths` of the order when the
-    strategy did not compute them itself.
+    strategy did not compute them itself (``random``, ``thesis``, ``pdm``,
+    ``pruning``): searched `depth` touches deep when there are at most
+    `optimal_max_classes` classes, else one touch deep, the bound
+    ``(1 + w(open)) / (1 - w(stay))`` that lower-bounds the deeper value.
     """
     config = config or StrategyConfig()
     n = table.n_paths
@@ -246,7 +277,9 @@ def rank_candidates(
         )
     top = ranking.order[: config.max_paths]
     if len(top) and not ranking.exact[top].all():
-        result = expected_remaining(table, config.depth, paths=top, deadline=ctx.deadline)
+        # strategies that do not search: `depth` deep on small sets, else one touch deep
+        depth = config.depth if table.n_classes <= config.optimal_max_classes else 1
+        result = expected_remaining(table, depth, paths=top, deadline=ctx.deadline)
         value = np.where(ranking.exact, ranking.expected_remaining, result.value)
         exact = ranking.exact | result.exact
         return Ranking(
@@ -309,6 +342,7 @@ def plan(
         gen,
         observations=observations,
         extra_paths=extra_paths,
+        deadline=deadline,
     )
     ranking = rank_candidates(
         found.table,
@@ -320,11 +354,14 @@ def plan(
         deadline=deadline,
     )
     paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
+    note = ranking.note
+    if found.truncated:
+        note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
     return finish(
         "ambiguous",
         paths,
-        truncated=ranking.truncated,
-        note=ranking.note,
+        truncated=ranking.truncated or found.truncated,
+        note=note,
         candidates=len(found.candidates),
         classes=found.table.n_classes,
     )

@@ -7,6 +7,7 @@ tolerance rules are checked one by one on hand-built scenes.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -15,13 +16,25 @@ import shapely
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
-from planner.bitsets import pack_bits, popcount, to_int, unpack_bits
+from planner.bitsets import (
+    IntervalUnions,
+    close_ends,
+    pack_bits,
+    popcount,
+    to_int,
+    transpose_bits,
+    unpack_bits,
+    weighted_count,
+)
 from planner.geometry import make_stable_pose, wrap_angle
 from planner.outcomes import (
     CandidateConfig,
     Candidates,
     OutcomeConfig,
     SurvivorTable,
+    _match,
+    _Slots,
+    class_survivors,
     confusability,
     contains_points,
     generate_candidates,
@@ -275,6 +288,66 @@ def test_outcomes_match_slow_reference(scene):
                 assert conf[c, h, g] == expected, (c, h, g)
 
 
+@st.composite
+def class_scenes(draw):
+    """Hypotheses sharing classes, some of them copies of others (exact ties)."""
+    n = draw(st.integers(2, 7))
+    coord = st.floats(-12, 12, allow_nan=False)
+    hyps = []
+    for _ in range(n):
+        if hyps and draw(st.booleans()):
+            # a copy of an earlier one, moved by nothing or a hair, in another class
+            base = hyps[draw(st.integers(0, len(hyps) - 1))]
+            dx, dt = draw(st.sampled_from([(0.0, 0.0), (1e-9, 0.0), (0.0, 1e-7), (0.0, 1e-5)]))
+            hyps.append(
+                dataclasses.replace(
+                    base,
+                    pose=Pose(base.pose.x + dx, base.pose.y, base.pose.theta + dt),
+                    equivalence_class=draw(st.integers(0, 3)),
+                )
+            )
+            continue
+        hyps.append(
+            hyp(
+                draw(st.sampled_from(sorted(SHAPES))),
+                draw(coord),
+                draw(coord),
+                draw(st.floats(-math.pi, math.pi)),
+                cls=draw(st.integers(0, 3)),
+                eps_t=draw(st.sampled_from([0.0, 1.0, 3.0])),
+                rotation=draw(st.sampled_from([0.0, 0.02])),
+            )
+        )
+    sensor = draw(st.sampled_from([SensorBounds(0.0, 0.0), SensorBounds(1.0, math.radians(3))]))
+    return hyps, sensor, draw(st.integers(0, 2**31))
+
+
+def dense_confusability(posed, out, sensor):
+    """Every outcome slot of h against every slot of g, pair by pair (`_match`)."""
+    slots = _Slots.of(posed, out, sensor)
+    columns = [getattr(slots, f.name) for f in dataclasses.fields(_Slots)]
+    mine = _Slots(*(col[:, :, None, :, None] for col in columns))
+    theirs = _Slots(*(col[:, None, :, None, :] for col in columns))
+    return _match(mine, theirs).any(axis=(-1, -2)) | (posed.cls[:, None] == posed.cls[None, :])
+
+
+@settings(max_examples=60, deadline=None)
+@given(class_scenes())
+def test_ties_and_classes_agree_with_the_pairwise_test(scene):
+    # copies in other classes put outcomes exactly on (or a hair off) the tolerance
+    # edges, where the interval passes hand over to the one-by-one test
+    hyps, sensor, seed = scene
+    posed = pose_hypotheses(hyps, MODELS)
+    origins, directions, lengths = random_rays(posed, np.random.default_rng(seed), count=16)
+    out = predict_outcomes(posed, origins, directions, lengths, sensor)
+    conf = confusability(posed, out, sensor)
+    np.testing.assert_array_equal(conf, dense_confusability(posed, out, sensor))
+    # the class survivors straight from the outcomes: the class matrix of conf
+    np.testing.assert_array_equal(
+        class_survivors(posed, out, sensor).bits, survivor_table(posed, conf).bits
+    )
+
+
 def test_chunking_does_not_change_outcomes():
     rng = np.random.default_rng(3)
     hyps = [hyp("ell", *rng.uniform(-10, 10, 2), rng.uniform(-3, 3), cls=i) for i in range(6)]
@@ -489,3 +562,40 @@ def test_candidate_count_is_configurable():
         for n in (0, 10, 40)
     ]
     assert sizes == [0, 10, 40]
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 3), st.integers(1, 140), st.integers(1, 140), st.integers(0, 2**31))
+def test_transpose_bits_and_weighted_count(lead, rows, cols, seed):
+    rng = np.random.default_rng(seed)
+    mask = rng.random((lead, rows, cols)) < 0.4
+    words = pack_bits(mask)
+    np.testing.assert_array_equal(
+        unpack_bits(transpose_bits(words, cols), rows), mask.swapaxes(1, 2)
+    )
+    np.testing.assert_array_equal(popcount(words), mask.sum(-1))
+    weight = rng.random(cols)
+    np.testing.assert_allclose(weighted_count(words, weight), mask @ weight, rtol=1e-12)
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(1, 4), st.integers(1, 30), st.integers(0, 2**31))
+def test_interval_unions_agree_with_brute_force(n_rows, n, seed):
+    rng = np.random.default_rng(seed)
+    # coarse values: many exact ties between ends
+    centre, half = rng.integers(0, 20, (n_rows, n)) / 2, rng.integers(0, 4, (n_rows, n)) / 2
+    low, high = centre - half, centre + half
+    member = rng.random((n_rows, n)) < 0.7
+    owner = np.broadcast_to(np.arange(n), (n_rows, n))
+    unions = IntervalUnions.of(low, high, owner, member, 1)
+    rows = rng.integers(0, n_rows, 25)
+    q_lo = rng.integers(0, 20, 25) / 2
+    q_hi = q_lo + rng.integers(0, 4, 25) / 2
+    got = unpack_bits(unions.overlapping(rows, q_lo, q_hi), n)
+    expected = member[rows] & (low[rows] <= q_hi[:, None]) & (high[rows] >= q_lo[:, None])
+    np.testing.assert_array_equal(got, expected)
+    # an interval's R end within [R - 0.5, R + 0.5] of another member's L end
+    near = close_ends(low, high, member, -0.5, 0.5)
+    gap = low[:, None, :] - high[:, :, None]
+    want = ((gap >= -0.5) & (gap <= 0.5) & member[:, None, :]).any(axis=2) & member
+    np.testing.assert_array_equal(near, want)

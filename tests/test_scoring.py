@@ -337,3 +337,73 @@ def test_fig72_blocking_boundary_crossed_yet_distinguishing():
     assert np.allclose(out.point[0, 0], [0, 20])
     assert info.p_distinguishing[0] == pytest.approx(1.0)
     assert FAMILIES[int(info.family[0])] == "distinguishing"
+
+
+def dense_scores(conf: np.ndarray, weight: np.ndarray, state: np.ndarray) -> tuple:
+    """P(DM), P(informative) and expected pruning from the (C, K, K) class matrix."""
+    conf = conf[:, state][:, :, state]
+    w = weight[state] / weight[state].sum()
+    surviving = conf.astype(float) @ w
+    p_dm = (conf.sum(axis=-1) == 1).astype(float) @ w
+    p_inf = (~conf.all(axis=-1)).astype(float) @ w
+    return p_dm, p_inf, (1.0 - surviving) @ w
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 140), st.integers(1, 6), st.integers(0, 2**31))
+def test_information_scores_agree_with_the_class_matrix(k, n_paths, seed):
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.05, 0.9)
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    for state in (None, rng.random(k) < 0.6):
+        if state is not None and not state.any():
+            continue
+        s = information_scores(table, state)
+        inside = np.ones(k, bool) if state is None else state
+        p_dm, p_inf, pruning = dense_scores(table.matrix(), table.weight, inside)
+        np.testing.assert_allclose(s.p_distinguishing, p_dm, atol=1e-12)
+        np.testing.assert_allclose(s.p_informative, p_inf, atol=1e-12)
+        np.testing.assert_allclose(s.expected_pruning, np.clip(pruning, 0, 1), atol=1e-12)
+
+
+def lookahead_reference(table: SurvivorTable, depth: int) -> np.ndarray:
+    """E_P(S) of every path, `depth` touches deep, by plain recursion over sets."""
+    conf, weight = table.matrix(), table.weight
+    together = conf.all(axis=0)
+
+    def settled(s):
+        return all(together[a, b] for a in s for b in s)
+
+    def path(s, c, d):
+        w = {h: weight[h] / sum(weight[j] for j in s) for h in s}
+        kids = {h: frozenset(j for j in s if conf[c, h, j]) for h in s}
+        stay = sum(w[h] for h in s if kids[h] == s)
+        if stay >= 1 - 1e-12:
+            return math.inf
+        rest = sum(w[h] * value(kids[h], d - 1) for h in s if kids[h] != s)
+        return (1 + rest) / (1 - stay)
+
+    def value(s, d):
+        if settled(s):
+            return 0.0
+        if d == 0:
+            return 1.0
+        return min(path(s, c, d) for c in range(len(conf)))
+
+    full = frozenset(range(table.n_classes))
+    return np.array([path(full, c, depth) if not settled(full) else 0.0 for c in range(len(conf))])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 12), st.integers(1, 6), st.integers(0, 2**31))
+def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
+    # inseparable pairs make settled leaves; the one-touch leaves run in batches
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.7)
+    pairs = rng.integers(0, k, (rng.integers(0, 4), 2))
+    conf[:, pairs[:, 0], pairs[:, 1]] = True
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    for depth in (1, 2, 3):
+        found = expected_remaining(table, depth)
+        np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
+        assert found.exact.all()

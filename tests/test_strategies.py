@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -12,7 +13,7 @@ from hypothesis import strategies as st
 from planner.errors import PlannerError
 from planner.geometry import make_stable_pose
 from planner.outcomes import CandidateConfig, SurvivorTable
-from planner.scoring import FAMILIES, UNINFORMATIVE
+from planner.scoring import FAMILIES, UNINFORMATIVE, expected_remaining
 from planner.strategies import (
     STRATEGIES,
     StrategyConfig,
@@ -291,3 +292,37 @@ def test_config_from_the_session_json():
         {"candidates": {"count": 32}, "outcome": {"grazing_angle": 0.2}}
     )
     assert nested.candidates.count == 32 and nested.outcome.grazing_angle == 0.2
+
+
+# fourteen squares in a row, each its own class: more than optimal_max_classes
+ROW = [hyp("square", 7 * i - 45, 0.5 * i, cls=i, p=1 / 14) for i in range(14)]
+
+
+@pytest.mark.parametrize("name", ["pdm", "pruning"])
+def test_strategies_that_do_not_search_score_one_touch_deep_on_large_sets(name):
+    config = StrategyConfig(name=name, **FAST)
+    result = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
+    found = analyse(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
+    assert found.table.n_classes > config.optimal_max_classes
+    paths = [found.candidates.path(i) for i in range(len(found.candidates))]
+    rows = {p.origin + p.direction: i for i, p in enumerate(paths)}
+    chosen = np.array([rows[p.origin + p.direction] for p in result.paths])
+    one = expected_remaining(found.table, 1, paths=chosen).value[chosen]
+    two = expected_remaining(found.table, 2, paths=chosen).value[chosen]
+    np.testing.assert_allclose([p.expected_remaining for p in result.paths], one)
+    assert np.all(one <= two + 1e-9)  # the one-touch bound is a lower bound
+    # on a small set they are searched as deep as lookahead does
+    small = StrategyConfig(name=name, optimal_max_classes=20, **FAST)
+    deep = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), small).paths
+    np.testing.assert_allclose([p.expected_remaining for p in deep], two)
+
+
+def test_budget_covers_the_outcome_model():
+    # 256 general candidates, a budget spent before the first block of outcomes is done
+    config = StrategyConfig(name="pdm", budget_ms=1e-3, candidates=CandidateConfig(count=256))
+    result = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
+    unlimited = dataclasses.replace(config, budget_ms=None)
+    full = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), unlimited)
+    assert result.truncated and "time budget" in result.note
+    assert 0 < result.candidates < full.candidates and not full.truncated
+    assert result.paths and all(p.family != "uninformative" for p in result.paths)
