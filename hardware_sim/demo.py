@@ -6,27 +6,39 @@ import math
 from typing import TextIO
 
 import numpy as np
-import shapely
 
-from hardware_sim.world import path_towards, random_world
+from hardware_sim.world import random_world
 from planner.library import load_objects
+from planner.plans import PlannedPath
 from planner.session import Session
+from planner.strategies import StrategyConfig, plan
 from planner.types import SensingPath, SensorBounds, Workspace
 
 __all__ = ["run_demo"]
 
 
-def _next_path(session: Session, rng: np.random.Generator) -> SensingPath:
-    """Thesis Exp. I: a random origin on the safe circle aimed at the centre of the union
-    of the posed hypotheses (at the workspace centre before any contact)."""
-    if session.hypotheses:
-        union = shapely.union_all(
-            [shapely.Polygon(session.posed_outline(h)) for h in session.hypotheses]
-        )
-        aim = np.array(union.centroid.coords[0])
-    else:
-        aim = np.asarray(session.workspace.center)
-    return path_towards(session.workspace, rng.uniform(-math.pi, math.pi), aim)
+def _next_path(
+    session: Session, sensor_position: tuple[float, float], rng: np.random.Generator
+) -> tuple[SensingPath, PlannedPath]:
+    """The planner's best path (lookahead, depth 2) for the current hypotheses."""
+    result = plan(
+        session.hypotheses,
+        session.models_by_name,
+        session.sensor,
+        session.workspace,
+        sensor_position,
+        StrategyConfig(name="lookahead", budget_ms=1000),
+        rng=rng,
+        observations=session.observations,
+    )
+    if not result.paths:
+        raise RuntimeError(f"the planner has no path to offer ({result.status})")
+    best = result.paths[0]
+    return best.path, best
+
+
+def _num(value: float | None) -> str:
+    return "-" if value is None else f"{value:.2f}"
 
 
 def run_demo(objects: str, seed: int, max_touches: int, out: TextIO) -> int:
@@ -45,8 +57,10 @@ def run_demo(objects: str, seed: int, max_touches: int, out: TextIO) -> int:
         file=out,
     )
     session = Session(models, bounds, workspace)
+    sensor_position = (workspace.radius, 0.0)
     for step in range(1, max_touches + 1):
-        path = _next_path(session, rng)
+        path, planned = _next_path(session, sensor_position, rng)
+        sensor_position = path.origin
         obs, _ = world.execute(path, bounds, rng)
         session = session.observe(obs)
         what = (
@@ -57,8 +71,11 @@ def run_demo(objects: str, seed: int, max_touches: int, out: TextIO) -> int:
         )
         classes = len({h.equivalence_class for h in session.hypotheses})
         print(
-            f"touch {step}: from ({path.origin[0]:.0f}, {path.origin[1]:.0f}) -> {what}; "
-            f"{len(session.hypotheses)} hypotheses in {classes} classes, status {session.status}",
+            f"touch {step}: from ({path.origin[0]:.0f}, {path.origin[1]:.0f}) "
+            f"[P(DM) {_num(planned.p_distinguishing)}, "
+            f"E[touches] {_num(planned.expected_remaining)}]"
+            f" -> {what}; {len(session.hypotheses)} hypotheses in {classes} classes, "
+            f"status {session.status}",
             file=out,
         )
         if session.status in ("localized", "inconsistent"):
