@@ -20,6 +20,23 @@ def test_bench_json_reports_every_set_and_error_case(capsys):
         assert r["update_p95_ms"] >= r["update_p50_ms"] > 0
 
 
+def test_bench_planning_reports_plan_times_after_0_to_3_touches(capsys):
+    argv = ["bench", "--sets", "symmetric", "--planning", "--no-recognition", "--json"]
+    assert main([*argv, "--plan-trials", "1", "--strategies", "pdm", "pruning"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert "recognition" not in out
+    rows = out["planning"]
+    assert [(r["position_error"], r["touches"]) for r in rows] == [
+        (e, k) for e in (0.0, 1.0) for k in range(4)
+    ]
+    for r in rows:
+        assert r["set"] == "symmetric" and r["trials"] == 1
+        assert set(r["p50_ms"]) == set(r["p95_ms"]) == {"pdm", "pruning"}
+        assert all(r["p95_ms"][s] >= r["p50_ms"][s] > 0 for s in ("pdm", "pruning"))
+        assert r["classes"] <= r["hypotheses"] <= r["hypotheses_max"]
+    assert rows[0]["hypotheses"] == 0 and rows[1]["candidates"] > 0
+
+
 def test_import_mesh_writes_an_object_file(tmp_path, capsys):
     mesh_path = tmp_path / "box.stl"
     trimesh.creation.box(extents=(40, 60, 100)).export(mesh_path)
