@@ -1,5 +1,6 @@
 """Objects (§8 format): register, list, fetch. Model coordinates are kept as given."""
 
+from collections.abc import Awaitable
 from typing import Annotated, Literal
 
 from fastapi import APIRouter, Path, Query, Request, Response
@@ -12,6 +13,19 @@ from app.settings import Settings
 from app.store import ObjectConflictError
 
 __all__ = ["build_router"]
+
+
+async def _registered(response: Response, registration: Awaitable[tuple[bool, str]]):
+    """201 for a new object, 200 for the same one again, 409 for other geometry."""
+    try:
+        created, name = await registration
+    except ObjectConflictError as exc:
+        raise ConflictError(
+            f"an object named {exc.args[0]!r} with other geometry is registered", field="name"
+        ) from exc
+    response.status_code = 201 if created else 200
+    response.headers["Location"] = f"/v1/objects/{name}"
+    return ObjectCreated(name=name)
 
 
 def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
@@ -32,16 +46,7 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
     )
     async def create_object(body: ObjectIn, service: ServiceDep, response: Response):  # type: ignore[valid-type]
         """Register one object (§8 format). The same name with other geometry: 409."""
-        try:
-            created, name = await service.register_object(body.as_dict())  # type: ignore[attr-defined]
-        except ObjectConflictError as exc:
-            raise ConflictError(
-                f"an object named {exc.args[0]!r} with other geometry is registered",
-                field="name",
-            ) from exc
-        response.status_code = 201 if created else 200
-        response.headers["Location"] = f"/v1/objects/{name}"
-        return ObjectCreated(name=name)
+        return await _registered(response, service.register_object(body.as_dict()))  # type: ignore[attr-defined]
 
     @router.get("", response_model=ObjectList, response_model_exclude_none=True)
     async def list_objects(
@@ -91,15 +96,8 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         data = await request.body()
         if not data:
             raise InvalidInputError("the request body must hold the mesh file", field="body")
-        try:
-            created, stored = await service.import_mesh(data, file_type, height, name, max_poses)
-        except ObjectConflictError as exc:
-            raise ConflictError(
-                f"an object named {exc.args[0]!r} with other geometry is registered",
-                field="name",
-            ) from exc
-        response.status_code = 201 if created else 200
-        response.headers["Location"] = f"/v1/objects/{stored}"
-        return ObjectCreated(name=stored)
+        return await _registered(
+            response, service.import_mesh(data, file_type, height, name, max_poses)
+        )
 
     return router
