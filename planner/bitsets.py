@@ -160,8 +160,11 @@ def weighted_count(words: np.ndarray, weight: np.ndarray) -> np.ndarray:
     subsets = ((np.arange(256)[:, None] >> np.arange(8)) & 1).astype(float)
     # table[b, v] = sum of the weights of bits set in byte value v of byte b
     table = padded.reshape(n_bytes, 8) @ subsets.T
-    raw = np.ascontiguousarray(np.asarray(words, dtype="<u8")).view(np.uint8)[..., :n_bytes]
-    return table[np.arange(n_bytes), raw].sum(axis=-1)
+    raw = np.ascontiguousarray(np.asarray(words, dtype="<u8")).view(np.uint8)
+    total = np.zeros(raw.shape[:-1])
+    for b in range(n_bytes):  # byte by byte: no (..., bytes) temporary
+        total += table[b][raw[..., b]]
+    return total
 
 
 @dataclass(frozen=True, eq=False)
@@ -213,7 +216,8 @@ class SurvivorTable:
         bits |= one_hot(np.arange(k), bits.shape[-1])
         if not (np.all(w >= 0) and w.sum() > 0):
             raise PlannerError("must be K weights >= 0 with a positive sum", field="weight")
-        everything = pack_bits(np.ones(k, dtype=bool))
+        everything = pack_bits(np.ones((k, k), dtype=bool))
+        # classes confusable with each class on every path (all, with no path)
         inseparable = np.bitwise_and.reduce(bits, axis=0) if len(bits) else everything
         return cls(bits=bits, weight=w / w.sum(), inseparable=inseparable & everything)
 

@@ -35,7 +35,6 @@ from planner.bitsets import (
     close_ends,
     compact,
     n_words,
-    one_hot,
     pack_bits,
     transpose_bits,
     unpack_bits,
@@ -256,6 +255,10 @@ def class_bits(
 #: cos(A) - 1e-12 = cos(A + x) needs x <= sqrt(2e-12) ~ 1.42e-6.
 _ANGLE_BAND = 1.5e-6
 
+#: Hit slots per path up to which every pair is compared one by one (cheaper than
+#: sorting intervals when there are few).
+_FEW_HITS = 24
+
 
 def _match_rows(
     posed: PosedSet,
@@ -295,9 +298,11 @@ class _Items:
     """The outcome slots of some paths as items (c, SLOTS H), item k = slot k // H
     of hypothesis k % H: `valid`, `hit`, interval centre `d` (along the path) and
     half-width `r`, `off` (distance off the path), normal angle `u` from the
-    heading in [0, 2 pi) with half-width `a`, and the `slots` fields (c, SLOTS H)."""
+    heading in [0, 2 pi) with half-width `a`; `slots` (C, H, SLOTS) and the
+    hypothesis `order` give every item's fields for the one-by-one tests."""
 
     part: slice
+    order: np.ndarray
     valid: np.ndarray
     hit: np.ndarray
     d: np.ndarray
@@ -314,25 +319,40 @@ class _Items:
         hit = flat(o.slot_hit & o.slot_valid)
         # angles from the path's heading: hit normals face back along it
         u = np.mod(flat(o.slot_angle) - o.heading[part, None], 2 * math.pi)
-        flat_slots = _Slots(*(flat(getattr(slots, f.name)) for f in fields(_Slots)))
         off = np.where(hit, np.abs(flat(o.slot_offset)), np.inf)
         return cls(
             part,
+            order,
             flat(o.slot_valid),
             hit,
             flat(o.slot_distance),
-            flat_slots.reach,
+            flat(slots.reach),
             off,
             u,
-            flat_slots.alpha,
-            flat_slots,
+            flat(slots.alpha),
+            slots,
         )
+
+    def _slots_at(self, c: np.ndarray, k: np.ndarray) -> _Slots:
+        """The slot fields of items (c, k) (broadcast)."""
+        n_hyp = len(self.order)
+        at = (c + self.part.start, self.order[k % n_hyp], k // n_hyp)
+        return _Slots(*(getattr(self.slots, f.name)[at] for f in fields(_Slots)))
 
     def rows(self, posed: PosedSet, width: int, chunk_elements: int) -> np.ndarray:
         n_paths, n_items = self.hit.shape
         n_hyp = n_items // SLOTS
         owner, slot = np.arange(n_items) % n_hyp, np.arange(n_items) // n_hyp
         owners = np.broadcast_to(owner, self.hit.shape)
+        rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
+        # misses match misses: slot i of h meets every missing slot j <= i of any g
+        miss = (self.valid & ~self.hit).reshape(n_paths, SLOTS, n_hyp)
+        seen = np.bitwise_or.accumulate(pack_bits(miss), axis=1)  # (c, SLOTS, W)
+        for i in range(SLOTS):
+            c, h = np.nonzero(miss[:, i])
+            rows[c, h] |= seen[c, i]
+        if self.hit.sum(axis=1).max(initial=0) <= _FEW_HITS:  # few: every pair one by one
+            return rows | self._all_pairs(owner)
         # arcs clear of the cut at the heading overlap iff their intervals do
         clear = (self.u - self.a >= _ANGLE_BAND) & (self.u + self.a <= 2 * math.pi - _ANGLE_BAND)
         clear &= self.hit & np.isfinite(self.d)
@@ -348,26 +368,19 @@ class _Items:
         on_path = clear & (self.off == 0)
         regular = on_path & ~close_ends(d_low, d_high, on_path, -band, band)
         regular &= ~close_ends(u_low, u_high, on_path, -1e-12, _ANGLE_BAND)
+        # each slot's regular items, by interval ends (distance, angle)
         lists = [
             [
-                IntervalUnions.of(low, high, owners, regular & (slot == j), width)
+                IntervalUnions.of(low[:, at], high[:, at], owners[:, at], regular[:, at], width)
                 for low, high in ((d_low, d_high), (u_low, u_high))
             ]
-            for j in range(SLOTS)
+            for at in (slice(j * n_hyp, (j + 1) * n_hyp) for j in range(SLOTS))
         ]
-        rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
         # regular slot i of h against the regular slots j <= i: intervals and arcs overlap
         for i in range(SLOTS):
             c, k = np.nonzero(regular & (slot == i))
             for j in range(i + 1):
                 rows[c, owner[k]] |= self._overlaps(lists[j], c, k, 0.0, 0.0)
-        # misses match misses: slot i of h meets every missing slot j <= i of any g
-        miss = (self.valid & ~self.hit).reshape(n_paths, SLOTS, n_hyp)
-        sets = np.bitwise_or.reduce(one_hot(np.where(miss, np.arange(n_hyp), -1), width), axis=2)
-        seen = np.bitwise_or.accumulate(sets, axis=1)  # (c, SLOTS, W)
-        for i in range(SLOTS):
-            c, h = np.nonzero(miss[:, i])
-            rows[c, h] |= seen[c, i]
         # near ties and near misses against the regular slots: sure matches from
         # shrunk intervals, and the others of grown intervals confirmed one by one
         near = clear & ~regular
@@ -405,12 +418,25 @@ class _Items:
         e, g = np.nonzero(unpack_bits(maybe, n_hyp))
         ok = np.zeros((len(c), n_hyp), dtype=bool)
         if len(e):
-            s = self.slots
-            mine = _Slots(*(getattr(s, f.name)[c[e], k[e]] for f in fields(_Slots)))
-            theirs = _Slots(*(getattr(s, f.name)[c[e], j * n_hyp + g] for f in fields(_Slots)))
-            hit = _match(mine, theirs)
+            hit = _match(self._slots_at(c[e], k[e]), self._slots_at(c[e], j * n_hyp + g))
             ok[e[hit], g[hit]] = True
         return pack_bits(ok)
+
+    def _all_pairs(self, owner: np.ndarray) -> np.ndarray:
+        """(c, H, W): for each pair of hit slots of a path, each pair once (the
+        transpose completes it), the owner of the second in the first's row."""
+        n_paths, n_hyp = len(self.hit), len(owner) // SLOTS
+        at = compact(self.hit)
+        path = np.arange(n_paths)[:, None]
+        first, second = np.triu_indices(at.shape[1])
+        ok = (at[:, first] >= 0) & (at[:, second] >= 0)
+        columns = self._slots_at(path, np.maximum(at, 0))
+        mine = _Slots(*(getattr(columns, f.name)[:, first] for f in fields(_Slots)))
+        theirs = _Slots(*(getattr(columns, f.name)[:, second] for f in fields(_Slots)))
+        c, p = np.nonzero(_match(mine, theirs) & ok)
+        pairs = np.zeros((n_paths, n_hyp, n_hyp), dtype=bool)
+        pairs[c, owner[at[c, first[p]]], owner[at[c, second[p]]]] = True
+        return pack_bits(pairs)
 
     def _exact(
         self, c: np.ndarray, k: np.ndarray, targets: np.ndarray, owner: np.ndarray, chunk: int
@@ -420,17 +446,25 @@ class _Items:
         at = compact(targets)
         member = at >= 0
         path = np.arange(len(targets))[:, None]
-        columns = [getattr(self.slots, f.name) for f in fields(_Slots)]
-        theirs = [col[path, np.maximum(at, 0)] for col in columns]
+        theirs = self._slots_at(path, np.maximum(at, 0))
         out = np.zeros((len(c), n_words(n_hyp)), dtype=np.uint64)
-        per = max(1, chunk // at.shape[1])
-        for lo in range(0, len(c), per):
-            cc, kk = c[lo : lo + per], k[lo : lo + per]
-            mine = _Slots(*(col[cc, kk, None] for col in columns))
-            e, t = np.nonzero(_match(mine, _Slots(*(col[cc] for col in theirs))) & member[cc])
+        # queries of paths with few targets first, each batch as wide as its widest path
+        size = member.sum(axis=1)[c]
+        by_size = np.argsort(size, kind="stable")
+        # batches of about `chunk` pairs
+        ends = np.searchsorted(np.cumsum(size[by_size]), np.arange(chunk, size.sum() + 1, chunk))
+        for lo, hi in zip(np.r_[0, ends], np.r_[ends, len(c)], strict=True):
+            if hi <= lo:
+                continue
+            pick = by_size[lo:hi]
+            width = max(1, int(size[pick[-1]]))
+            cc, kk = c[pick], k[pick]
+            mine = self._slots_at(cc[:, None], kk[:, None])
+            rows = _Slots(*(getattr(theirs, f.name)[cc, :width] for f in fields(_Slots)))
+            e, t = np.nonzero(_match(mine, rows) & member[cc, :width])
             hits = np.zeros((len(cc), n_hyp), dtype=bool)
             hits[e, owner[at[cc[e], t]]] = True
-            out[lo : lo + per] = pack_bits(hits)
+            out[pick] = pack_bits(hits)
         return out
 
 

@@ -73,8 +73,10 @@ __all__ = [
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
 
-#: Fewest candidates per block when a time budget splits the outcome passes.
-_BLOCK = 64
+#: Fewest candidates per block when a time budget splits the outcome passes, and
+#: fewest candidates x hypotheses per block.
+_BLOCK = 16
+_BLOCK_ELEMENTS = 4096
 
 
 @dataclass(frozen=True)
@@ -214,7 +216,8 @@ def analyse(
     deadline = deadline or Deadline()
     # anytime: candidates in blocks, best first (the strategy's own, extra, general);
     # when the budget runs out, the blocks done so far are the candidates
-    block = len(cands) if deadline.end == np.inf else max(_BLOCK, -(-len(cands) // 4))
+    size = max(_BLOCK, _BLOCK_ELEMENTS // len(posed))
+    block = len(cands) if deadline.end == np.inf else size
     for lo in range(0, max(len(cands), 1), max(block, 1)):
         if outcomes and deadline.expired():
             break

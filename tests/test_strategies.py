@@ -318,11 +318,22 @@ def test_strategies_that_do_not_search_score_one_touch_deep_on_large_sets(name):
 
 
 def test_budget_covers_the_outcome_model():
-    # 256 general candidates, a budget spent before the first block of outcomes is done
+    # 72 classes x 256 candidates come in blocks; the budget is spent after the first
+    many = [hyp("square", 2 * (i % 12) - 11, 2 * (i // 12) - 5, cls=i, p=1 / 72) for i in range(72)]
     config = StrategyConfig(name="pdm", budget_ms=1e-3, candidates=CandidateConfig(count=256))
-    result = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
+    result = plan(many, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
     unlimited = dataclasses.replace(config, budget_ms=None)
-    full = plan(ROW, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), unlimited)
+    full = plan(many, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), unlimited)
     assert result.truncated and "time budget" in result.note
     assert 0 < result.candidates < full.candidates and not full.truncated
     assert result.paths and all(p.family != "uninformative" for p in result.paths)
+
+
+@pytest.mark.parametrize("name", ["pdm", "lookahead", "optimal"])
+def test_no_candidate_at_all(name):
+    none = CandidateConfig(count=0, boundary_aims=0, intersection_aims=0)
+    result = plan(
+        FIG71, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), StrategyConfig(name=name, candidates=none)
+    )
+    assert result.status == "ambiguous" and result.candidates == 0 and not result.paths
+    assert "no informative path" in result.note
