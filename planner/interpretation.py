@@ -34,7 +34,13 @@ from planner.constraints import (
 )
 from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
 from planner.memo import cached_property
-from planner.pose import fit_batch, noise_scales, point_bounds, worst_case_bounds
+from planner.pose import (
+    consistent_set_bounds,
+    fit_batch,
+    noise_scales,
+    point_bounds,
+    worst_case_bounds,
+)
 from planner.types import Contact, ObjectModel, Observation, SensorBounds, StablePose, Workspace
 
 __all__ = ["Candidates", "Group", "RecognitionConfig", "TreeLevel", "evaluate", "extend"]
@@ -308,12 +314,35 @@ def evaluate(
     if linearized:
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
-        eps_t = 2 * (moved[:, 1:].max(axis=1) * (1 + phi) + second) + cell[src]
-        d_translation = moved[:, 0] * (1 + phi) + second + cell[src] / 2
+        moved = moved * (1 + phi) + second
+        d_theta = d_th[src]
+        # determined poses: the set of poses consistent with every contact is often far
+        # smaller than the estimator's worst case (errors do not add up); keep the smaller
+        det = np.flatnonzero(fit.rank2)
+        if det.size:
+            set_moved, set_dth = consistent_set_bounds(
+                P,
+                U,
+                faces.normal[face[det]],
+                faces.offset[face[det]],
+                assigned[det],
+                fit.theta[det],
+                fit.t[det],
+                origin_and_outline,
+                eps_d,
+                phi,
+            )
+            set_moved = set_moved + slack
+            at = np.flatnonzero(fit.rank2[src])  # rank-2 rows have one sample each
+            pos = np.searchsorted(det, src[at])
+            moved[at] = np.minimum(moved[at], set_moved[pos])
+            d_theta[at] = np.minimum(d_theta[at], set_dth[pos] + ANGLE_SLACK)
+        eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
+        d_translation = moved[:, 0] + cell[src] / 2
     else:
         eps_t = eps_t0[src] + cell[src]
         d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
-    d_theta = d_th[src]
+        d_theta = d_th[src]
     ok = np.ones(len(src), dtype=bool)
 
     # model check: each contact on its finite posed face, normal within phi + dtheta

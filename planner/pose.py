@@ -29,9 +29,16 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from planner.geometry import rotation_matrices
+from planner.geometry import rotation_matrices, wrap_angle
 
-__all__ = ["FitBatch", "PoseFilter", "fit_batch", "lifted_rows", "noise_scales"]
+__all__ = [
+    "FitBatch",
+    "PoseFilter",
+    "consistent_set_bounds",
+    "fit_batch",
+    "lifted_rows",
+    "noise_scales",
+]
 
 _J = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90 degree turn
 
@@ -342,3 +349,134 @@ class PoseFilter:
         R = rotation_matrices(np.asarray(theta))
         t = -(R @ np.array([bx, by])) / rho
         return float(t[0]), float(t[1]), theta
+
+
+def consistent_set_bounds(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    model_points: np.ndarray,
+    eps_d: float,
+    phi: float,
+    samples: int = 25,
+    max_contacts: int = 7,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Largest displacement of model points over every pose CONSISTENT with the
+    contacts (set membership), for determined poses; no linearization.
+
+    A pose ``(t', theta')`` is consistent when every assigned contact's normal lies
+    within phi of its face's posed normal, ``|psi_j - theta' - angle(n_a)| <= phi``
+    (an interval of theta'), and its measured point lies within eps_d of the face's
+    posed line, ``|n'_j·(p_j - t') - d_a| <= eps_d`` with ``n'_j = R(theta') n_a``:
+    for a fixed theta' that is a polygon of t' (slabs, exact), bounded when two faces
+    are not parallel. The displacement ``|R(theta') v + t' - (R(theta) v + t)|`` of a
+    model point v is convex in t', so its maximum is at a polygon vertex; theta' is
+    swept over its interval at `samples` points, and the largest change between
+    neighbouring samples is added (the sweep's allowance). Unlike the estimator's
+    worst case (:func:`point_bounds`), errors do not add up: every contact shrinks
+    the set.
+
+    `points`, `normals` (s, 2) measured; `face_normals` (K, s, 2), `face_offsets`
+    (K, s), `assigned` (K, s) as for :func:`fit_batch` (only rows with two non-parallel
+    assigned faces); `theta` (K,), `t` (K, 2) the fits; `model_points` (P, 2). Returns
+    `moved` (K, P) and `dtheta` (K,), inf where no sampled pose is consistent (the
+    caller keeps its other bound). At most the latest `max_contacts` contacts of a
+    row are used (any subset gives a sound, larger set).
+    """
+    K, s = assigned.shape
+    P = len(model_points)
+    moved = np.full((K, P), np.inf)
+    dth = np.full(K, np.inf)
+    if K == 0 or s < 2:
+        return moved, dth
+    from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
+    use = assigned & (from_end <= max_contacts)
+    # theta' interval from the normals
+    psi = np.arctan2(normals[:, 1], normals[:, 0])
+    face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
+    r_ang = wrap_angle(psi[None] - face_angle - theta[:, None])
+    lo = np.where(use, r_ang - phi, -np.inf).max(axis=1)
+    hi = np.where(use, r_ang + phi, np.inf).min(axis=1)
+    pairs = np.array(np.triu_indices(s, 1)).T  # (Q, 2)
+    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    per_row = samples * len(pairs) * 4 * max(P, s)
+    chunk = max(1, 2_000_000 // per_row)
+    for k0 in range(0, K, chunk):
+        sl = slice(k0, min(K, k0 + chunk))
+        m, d = _sweep(
+            points,
+            face_normals[sl],
+            face_offsets[sl],
+            use[sl],
+            theta[sl],
+            t[sl],
+            lo[sl],
+            hi[sl],
+            model_points,
+            eps_d,
+            samples,
+            pairs,
+            sides,
+        )
+        moved[sl], dth[sl] = m, d
+    return moved, dth
+
+
+def _sweep(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    model_points: np.ndarray,
+    eps_d: float,
+    samples: int,
+    pairs: np.ndarray,
+    sides: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """:func:`consistent_set_bounds` on one chunk of rows."""
+    frac = np.linspace(0.0, 1.0, samples)
+    d_theta = lo[:, None] + (hi - lo)[:, None] * frac  # (K, N) offsets from the fit
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    n = np.einsum("knij,ksj->knsi", R, face_normals)  # posed normals (K, N, s, 2)
+    centre = np.einsum("knsi,si->kns", n, points) - face_offsets[:, None, :]  # n'·t' = centre ± eps
+    i, j = pairs[:, 0], pairs[:, 1]
+    a, b = n[:, :, i], n[:, :, j]  # (K, N, Q, 2)
+    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    det = np.where(good, det, 1.0)
+    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
+    vx = (ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]
+    vy = (a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]
+    vert = np.stack([vx, vy], axis=-1)  # (K, N, Q, 4, 2) candidate translations t'
+    proj = np.einsum("knsi,knqvi->knqvs", n, vert)
+    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
+    inside = np.abs(proj - centre[:, :, None, None, :]) <= eps_d + tol[:, :, None, None, :]
+    ok = good[..., None] & np.all(inside | ~use[:, None, None, None, :], axis=-1)
+    ok &= (hi >= lo)[:, None, None, None]
+    # displacement of each model point: R' v + t' - (R v + t)
+    fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
+    posed = np.einsum("knij,pj->knpi", R, model_points)  # (K, N, P, 2)
+    disp = vert[:, :, :, :, None, :] + posed[:, :, None, None] - fit_pts[:, None, None, None]
+    norm = np.where(ok[..., None], np.linalg.norm(disp, axis=-1), -np.inf)
+    per_sample = norm.max(axis=(2, 3))  # (K, N, P)
+    feasible = ok.any(axis=(2, 3))  # (K, N)
+    # sweep allowance: the largest change between neighbouring consistent samples
+    both = feasible[:, 1:] & feasible[:, :-1]
+    finite = np.where(feasible[..., None], per_sample, 0.0)
+    step = np.where(both[..., None], np.abs(np.diff(finite, axis=1)), 0.0).max(axis=1)
+    moved = per_sample.max(axis=1) + step
+    ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
+    dth = ang + (hi - lo) / (samples - 1)
+    empty = ~feasible.any(axis=1)
+    moved[empty] = np.inf
+    dth[empty] = np.inf
+    return moved, dth
