@@ -133,7 +133,8 @@ def fit_batch(
 ) -> FitBatch:
     """Weighted least-squares pose of K interpretations over s contacts at once.
 
-    `points`, `normals`: (s, 2) measured contacts (world); `face_normals` (K, s, 2)
+    `points`, `normals`: (s, 2) measured contacts (world), shared by every row, or
+    (K, s, 2) per row; `face_normals` (K, s, 2)
     and `face_offsets` (K, s): the model faces assigned to them; `assigned` (K, s)
     bool (False = spurious contact, ignored); `reference` (K, 2) model point whose
     world position the bounds are expressed at. Every row needs one assigned contact.
@@ -143,7 +144,10 @@ def fit_batch(
     the caller moves them along `slide`.
     """
     K = assigned.shape[0]
-    H, y = lifted_rows(points[None], normals[None], face_normals, face_offsets)  # (K,s,3,4)
+    points = np.broadcast_to(points, (K, *points.shape[-2:]))
+    normals = np.broadcast_to(normals, (K, *normals.shape[-2:]))
+    rows = np.arange(K)
+    H, y = lifted_rows(points, normals, face_normals, face_offsets)  # (K,s,3,4)
     w_row = np.array([1 / sigma_d**2, 1 / sigma_phi**2, 1 / sigma_phi**2])
     W = assigned[..., None] * w_row  # (K, s, 3)
     info = np.einsum("ksri,ksr,ksrj->kij", H, W, H)
@@ -159,7 +163,7 @@ def fit_batch(
     # rank 1: pin the first contact's model coordinate along the faces, e·(R^T p_1 + b) = 0,
     # with e the face direction (model frame): samples then slide the object along the faces
     e = n_ref @ _J.T
-    anchor = points[first]  # (K, 2)
+    anchor = points[rows, first]  # (K, 2)
     pin, _ = lifted_rows(anchor, anchor, e, np.zeros(K))
     pin = pin[:, 0, :] * (~rank2)[:, None]  # the line-row form with n -> e
     info = info + np.einsum("ki,kj->kij", pin, pin) / sigma_d**2
@@ -185,12 +189,12 @@ def fit_batch(
     G[:, :2, 2:] = -R / rho[:, None, None]
 
     # first order: dz = -info^-1 H^T W E dm  (residual terms are second order)
-    E = _row_derivatives(z[:, None, :], normals[None], face_normals)  # (K, s, 3, 3)
+    E = _row_derivatives(z[:, None, :], normals, face_normals)  # (K, s, 3, 3)
     dz = -np.einsum("kij,ksrj,ksr,ksrm->ksim", info_inv, H, W, E)
     # the pin's anchor is the first contact's measured point: its error moves the pin too
-    e_pin = _row_derivatives(z, normals[first], e)[:, 0, :2]  # (K, 2): d(pin·z)/d p_1
+    e_pin = _row_derivatives(z, normals[rows, first], e)[:, 0, :2]  # (K, 2): d(pin·z)/d p_1
     dz_pin = -np.einsum("kij,kj,km->kim", info_inv, pin, e_pin) / sigma_d**2
-    dz[np.arange(K), first, :, :2] += dz_pin
+    dz[rows, first, :, :2] += dz_pin
     sens_origin = np.einsum("kij,ksjm->ksim", G, dz)  # (K, s, 3, 3)
     # q = R ref + t: dq = dt + R J ref dtheta
     arm = np.einsum("kij,jl,kl->ki", R, _J, reference)
@@ -200,7 +204,7 @@ def fit_batch(
     # pose-space information of the point-on-line and normal residuals:
     # line r = n_w·(p - t) - d:  dr/dt = -n_w,  dr/dtheta = (J n_w)·(p - t);  angle: dr/dtheta = -1
     n_w = np.einsum("kij,ksj->ksi", R, face_normals)
-    lever = np.einsum("ksi,ksi->ks", n_w @ _J.T, points[None] - t[:, None, :])
+    lever = np.einsum("ksi,ksi->ks", n_w @ _J.T, points - t[:, None, :])
     g = np.concatenate([-n_w, lever[..., None]], axis=-1)  # (K, s, 3)
     info_pose = np.einsum("ksi,ks,ksj->kij", g, assigned / sigma_d**2, g)
     info_pose[:, 2, 2] += assigned.sum(axis=1) / sigma_phi**2
@@ -380,15 +384,17 @@ def consistent_set_bounds(
     worst case (:func:`point_bounds`), errors do not add up: every contact shrinks
     the set.
 
-    `points`, `normals` (s, 2) measured; `face_normals` (K, s, 2), `face_offsets`
-    (K, s), `assigned` (K, s) as for :func:`fit_batch` (only rows with two non-parallel
-    assigned faces); `theta` (K,), `t` (K, 2) the fits; `model_points` (P, 2). Returns
-    `moved` (K, P) and `dtheta` (K,), inf where no sampled pose is consistent (the
-    caller keeps its other bound). At most the latest `max_contacts` contacts of a
-    row are used (any subset gives a sound, larger set).
+    `points`, `normals` (s, 2) measured, or (K, s, 2) per row; `face_normals`
+    (K, s, 2), `face_offsets` (K, s), `assigned` (K, s) as for :func:`fit_batch` (only
+    rows with two non-parallel assigned faces); `theta` (K,), `t` (K, 2) the fits;
+    `model_points` (P, 2). Returns `moved` (K, P) and `dtheta` (K,), inf where no
+    sampled pose is consistent (the caller keeps its other bound). At most the latest
+    `max_contacts` contacts of a row are used (any subset gives a sound, larger set).
     """
     K, s = assigned.shape
     P = len(model_points)
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
     moved = np.full((K, P), np.inf)
     dth = np.full(K, np.inf)
     if K == 0 or s < 2:
@@ -396,9 +402,9 @@ def consistent_set_bounds(
     from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
     use = assigned & (from_end <= max_contacts)
     # theta' interval from the normals
-    psi = np.arctan2(normals[:, 1], normals[:, 0])
+    psi = np.arctan2(normals[..., 1], normals[..., 0])
     face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
-    r_ang = wrap_angle(psi[None] - face_angle - theta[:, None])
+    r_ang = wrap_angle(psi - face_angle - theta[:, None])
     lo = np.where(use, r_ang - phi, -np.inf).max(axis=1)
     hi = np.where(use, r_ang + phi, np.inf).min(axis=1)
     pairs = np.array(np.triu_indices(s, 1)).T  # (Q, 2)
@@ -408,7 +414,7 @@ def consistent_set_bounds(
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))
         m, d = _sweep(
-            points,
+            points[sl],
             face_normals[sl],
             face_offsets[sl],
             use[sl],
@@ -446,7 +452,9 @@ def _sweep(
     d_theta = lo[:, None] + (hi - lo)[:, None] * frac  # (K, N) offsets from the fit
     R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
     n = np.einsum("knij,ksj->knsi", R, face_normals)  # posed normals (K, N, s, 2)
-    centre = np.einsum("knsi,si->kns", n, points) - face_offsets[:, None, :]  # n'·t' = centre ± eps
+    centre = (
+        np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    )  # n'·t' = centre ± eps
     i, j = pairs[:, 0], pairs[:, 1]
     a, b = n[:, :, i], n[:, :, j]  # (K, N, Q, 2)
     det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]

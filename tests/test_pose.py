@@ -10,8 +10,8 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
-from planner.pose import PoseFilter, fit_batch, noise_scales
-from planner.types import SensorBounds
+from planner.pose import PoseFilter, consistent_set_bounds, fit_batch, noise_scales
+from planner.types import Pose, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
 
 
@@ -89,3 +89,58 @@ def test_filter_reports_undetermined_pose_until_two_faces():
     assert not kf.ready
     with pytest.raises(ValueError, match="not determined"):
         _ = kf.pose
+
+
+@pytest.mark.parametrize("name", ["thesis_like", "workshop"])
+@settings(max_examples=20, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(2, 4))
+def test_per_row_contacts_give_the_shared_fit(name, seed, count):
+    bounds = SensorBounds(1.0, math.radians(5))
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    obs, faces = _touches(world, bounds, rng, count)
+    shared = _fit(world, obs, faces, bounds)
+    P = np.array([o.contact.point for o in obs])
+    U = np.array([o.contact.normal for o in obs])
+    stable = world.stable
+    fn, fo = stable.faces.normal[faces][None], stable.faces.offset[faces][None]
+    sd, sp = noise_scales(1.0, math.radians(5), stable.centroid_radius)
+    assigned = np.ones((1, len(obs)), bool)
+    rows = fit_batch(P[None], U[None], fn, fo, assigned, stable.centroid[None], sd, sp)
+    np.testing.assert_allclose(rows.z, shared.z, rtol=1e-12, atol=1e-12)
+    np.testing.assert_allclose(rows.sens, shared.sens, rtol=1e-9, atol=1e-12)
+    args = (fn, fo, assigned, shared.theta, shared.t, stable.outline, 1.0, math.radians(5))
+    a = consistent_set_bounds(P, U, *args)
+    b = consistent_set_bounds(P[None], U[None], *args)
+    np.testing.assert_allclose(a[0], b[0])
+    np.testing.assert_allclose(a[1], b[1])
+
+
+@pytest.mark.parametrize("name", SET_NAMES)
+@settings(max_examples=30, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(2, 5))
+def test_consistent_set_bound_covers_the_true_pose(name, seed, count):
+    # set membership: the true pose keeps every contact within its bounds, so every
+    # model point moves from the fit to the truth by no more than the bound
+    bounds = SensorBounds(1.0, math.radians(5))
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    obs, faces = _touches(world, bounds, rng, count)
+    fit = _fit(world, obs, faces, bounds)
+    stable = world.stable
+    moved, dtheta = consistent_set_bounds(
+        np.array([o.contact.point for o in obs]),
+        np.array([o.contact.normal for o in obs]),
+        stable.faces.normal[faces][None],
+        stable.faces.offset[faces][None],
+        np.ones((1, len(obs)), bool),
+        fit.theta,
+        fit.t,
+        stable.outline,
+        bounds.position_error,
+        bounds.normal_error,
+    )
+    fitted = Pose(float(fit.t[0, 0]), float(fit.t[0, 1]), float(fit.theta[0]))
+    true_move = np.hypot(*(world.pose.apply(stable.outline) - fitted.apply(stable.outline)).T)
+    assert np.all(true_move <= moved[0] + 1e-6)
+    assert abs(math.remainder(world.pose.theta - fit.theta[0], 2 * math.pi)) <= dtheta[0] + 1e-9
