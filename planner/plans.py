@@ -14,11 +14,13 @@ import numpy as np
 
 from planner.types import SensingPath, Workspace
 
-__all__ = ["PLAN_STATUSES", "Plan", "PlannedPath", "opening_path"]
+__all__ = ["PLAN_STATUSES", "REFINING", "Plan", "PlannedPath", "opening_path"]
 
 #: Plan-level status, as the session's: a probe is needed first, several
 #: classes are left, one class is left, or no hypothesis explains the contacts.
 PLAN_STATUSES = ("awaiting_contact", "ambiguous", "localized", "inconsistent")
+#: The family of a path offered to shrink the error disks when none is informative.
+REFINING = "refining"
 
 _GOLDEN_ANGLE = math.pi * (3 - math.sqrt(5))
 
@@ -31,7 +33,10 @@ def _finite(x: float | None) -> float | None:
 class PlannedPath:
     """One ranked sensing path (world frame) with its scores.
 
-    `family` is one of distinguishing, informative, partial, uninformative;
+    `family` is one of distinguishing, informative, partial, uninformative, or
+    refining (offered only when no path is informative: it tells no hypothesis
+    apart but shrinks their error disks to `expected_eps_t`, the class-weighted
+    mean disk diameter expected after the touch);
     `expected_remaining` the expected number of touches still needed if this
     path is taken, itself included (None when unknown, e.g. before any contact;
     a lower bound when the plan is `truncated`): ``lookahead`` searches it
@@ -54,6 +59,7 @@ class PlannedPath:
     expected_remaining: float | None
     motion_cost: float
     source: str = "general"
+    expected_eps_t: float | None = None
 
     @property
     def path(self) -> SensingPath:
@@ -73,6 +79,7 @@ class PlannedPath:
             "expected_remaining": _finite(self.expected_remaining),
             "motion_cost": _finite(self.motion_cost),
             "source": self.source,
+            "expected_eps_t": _finite(self.expected_eps_t),
         }
 
 

@@ -14,41 +14,56 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+import shapely
 
 from planner.candidates import Candidates, paths_through, union_centre
 from planner.errors import PlanningNotPossibleError
+from planner.geometry import rotation_matrices
 from planner.plans import PlannedPath, opening_path
 from planner.posed import PosedSet
 from planner.scoring import motion_cost
-from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds, Workspace
+from planner.types import (
+    Contact,
+    Hypothesis,
+    ObjectModel,
+    SensingPath,
+    SensorBounds,
+    Workspace,
+)
 
 if TYPE_CHECKING:
     from planner.strategies import StrategyConfig
 
-__all__ = ["opening_probe", "strategy_paths"]
+__all__ = ["opening_probe", "search_chord", "strategy_paths"]
 
 
 def opening_probe(
     config: StrategyConfig,
+    models: Mapping[str, ObjectModel],
     workspace: Workspace,
     sensor_position: Sequence[float],
-    misses: int,
+    missed: Sequence[SensingPath],
     rng: np.random.Generator,
 ) -> PlannedPath:
-    """Before any contact: toward the centre from the sensor's place (``random``:
-    from a random place)."""
-    angle = float(rng.uniform(-math.pi, math.pi)) if config.name == "random" else None
-    path = opening_path(workspace, sensor_position, misses, angle)
-    # motion: the arc to the origin plus the way to the centre
+    """Before any contact. The first probe runs from the sensor's place through the
+    centre (``random``: from a random place, every time); after `missed` paths, the
+    chord most likely to meet the object (:func:`search_chord`)."""
+    aim = (float(workspace.center[0]), float(workspace.center[1]))
+    if config.name == "random":
+        path = opening_path(workspace, sensor_position, angle=float(rng.uniform(-math.pi, math.pi)))
+    elif not missed:
+        path = opening_path(workspace, sensor_position)
+    else:
+        path, aim = search_chord(models, workspace, missed, sensor_position)
     cost = motion_cost(
-        np.array([path.origin]), np.array([workspace.radius]), workspace, sensor_position
+        np.array([path.origin]), np.array([path.length / 2]), workspace, sensor_position
     )[0]
     # nothing is known yet: any contact teaches something, none can be predicted
     return PlannedPath(
         origin=path.origin,
         direction=path.direction,
         length=path.length,
-        aim=(float(workspace.center[0]), float(workspace.center[1])),
+        aim=aim,
         family="informative",
         p_distinguishing=0.0,
         p_informative=1.0,
@@ -57,6 +72,113 @@ def opening_probe(
         motion_cost=float(cost),
         source="opening",
     )
+
+
+def search_chord(
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    missed: Sequence[SensingPath],
+    sensor_position: Sequence[float],
+    samples: int = 4096,
+    angles: int = 36,
+    offsets: int = 41,
+) -> tuple[SensingPath, tuple[float, float]]:
+    """The chord of the safe circle most likely to meet the object after `missed` paths.
+
+    Prior: the object (by its prior), stable pose (by its probability), orientation
+    uniform, position uniform among those keeping it inside the safe circle, as
+    `samples` fixed draws. A draw that one of the `missed` paths would have met is
+    ruled out. A chord (normal angle a, offset rho from the centre) meets a draw's
+    outline exactly when rho lies strictly between the outline's least and greatest
+    projection on the normal; the chord meeting the most surviving draws wins
+    (ties: the least motion from the sensor's place). With no draw left (the prior
+    was wrong), chords through the centre turn by the golden angle per miss.
+    Returns the path (origin on the circle, through to the far side) and its midpoint.
+
+    >>> from planner.library import object_from_dict
+    >>> sq = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+    >>> first = SensingPath((50.0, 0.0), (-1.0, 0.0), 100.0)
+    >>> path, aim = search_chord({"sq": sq}, Workspace((0, 0), 50), [first], (50, 0))
+    >>> abs(aim[1]) > 5 or abs(aim[0]) > 5   # off the band the first chord swept
+    True
+    """
+    centre = np.asarray(workspace.center, dtype=float)
+    R = workspace.radius
+    alpha = np.arange(angles) * math.pi / angles
+    normal = np.stack([np.cos(alpha), np.sin(alpha)], axis=1)  # (A, 2)
+    lo, hi = _prior_extents(models, workspace, missed, normal, samples)  # (N, A)
+    if not len(lo):
+        return opening_path(workspace, sensor_position, len(missed)), (
+            float(centre[0]),
+            float(centre[1]),
+        )
+    rho = np.linspace(-R, R, offsets + 2)[1:-1]  # (O,)
+    # share of the surviving draws met: lo < rho < hi
+    inside = (lo.T[:, None, :] < rho[None, :, None]) & (rho[None, :, None] < hi.T[:, None, :])
+    score = inside.mean(axis=2).ravel()  # (A * O,)
+    a_idx, o_idx = np.divmod(np.arange(score.size), len(rho))
+    half = np.sqrt(R**2 - rho[o_idx] ** 2)
+    n = normal[a_idx]
+    t = np.stack([-n[:, 1], n[:, 0]], axis=1)
+    mid = centre + rho[o_idx, None] * n
+    # both ways along each chord: origin at one end, heading to the other
+    origins = np.concatenate([mid - half[:, None] * t, mid + half[:, None] * t])
+    heading = np.concatenate([t, -t])
+    cost = motion_cost(origins, np.concatenate([half, half]), workspace, sensor_position)
+    best = int(np.lexsort((cost, -np.concatenate([score, score])))[0])
+    k = best % len(score)
+    path = SensingPath(
+        (float(origins[best, 0]), float(origins[best, 1])),
+        (float(heading[best, 0]), float(heading[best, 1])),
+        float(2 * half[k]),
+    )
+    return path, (float(mid[k, 0]), float(mid[k, 1]))
+
+
+def _prior_extents(
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    missed: Sequence[SensingPath],
+    normal: np.ndarray,
+    samples: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
+    centre, of the prior draws of the posed outline that no `missed` path meets."""
+    rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
+    items = list(models.values())
+    prior = np.array([m.prior if m.prior is not None else 1.0 for m in items])
+    groups = [
+        (m, j, prior[i] / prior.sum())
+        for i, m in enumerate(items)
+        for j in range(len(m.stable_poses))
+    ]
+    weight = np.array(
+        [
+            w * m.stable_poses[j].probability / sum(p.probability for p in m.stable_poses)
+            for m, j, w in groups
+        ]
+    )
+    counts = rng.multinomial(samples, weight / weight.sum())
+    lines = shapely.linestrings(
+        [[p.origin, np.add(p.origin, np.multiply(p.length, p.direction))] for p in missed]
+    )
+    centre = np.asarray(workspace.center, dtype=float)
+    lo, hi = [], []
+    for (model, j, _), n in zip(groups, counts, strict=True):
+        if not n:
+            continue
+        stable = model.stable_poses[j]
+        reach = max(workspace.radius - stable.radius, 0.0)
+        r = reach * np.sqrt(rng.random(n))
+        a, theta = rng.uniform(-math.pi, math.pi, (2, n))
+        shift = r[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)  # relative to the centre
+        # v_world = R(theta) v + t
+        posed = np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + shift[:, None]
+        met = shapely.intersects(shapely.polygons(posed + centre)[:, None], lines[None]).any(axis=1)
+        proj = posed[~met] @ normal.T  # (n, V, A)
+        lo.append(proj.min(axis=1))
+        hi.append(proj.max(axis=1))
+    return np.concatenate(lo), np.concatenate(hi)
 
 
 def _chords(aim: np.ndarray, angles: np.ndarray, workspace: Workspace, source: str) -> Candidates:

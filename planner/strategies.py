@@ -38,8 +38,9 @@ from planner.outcomes import (
     pose_hypotheses,
     predict_outcomes,
 )
-from planner.plans import Plan, PlannedPath, opening_path
+from planner.plans import REFINING, Plan, PlannedPath, opening_path
 from planner.probes import opening_probe, strategy_paths
+from planner.refine import refinement
 from planner.scoring import (
     FAMILIES,
     UNINFORMATIVE,
@@ -50,6 +51,7 @@ from planner.scoring import (
 )
 from planner.search import Deadline, expected_remaining
 from planner.types import (
+    Contact,
     Hypothesis,
     ObjectModel,
     Observation,
@@ -69,6 +71,7 @@ __all__ = [
     "opening_path",
     "plan",
     "rank_candidates",
+    "repeated_paths",
 ]
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
@@ -77,6 +80,8 @@ STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
 #: fewest candidates x hypotheses per block.
 _BLOCK = 16
 _BLOCK_ELEMENTS = 4096
+#: Smallest share of the expected error disk a refining path must remove.
+_REFINE_GAIN = 0.05
 
 
 @dataclass(frozen=True)
@@ -211,6 +216,9 @@ def analyse(
         sensor_position=sensor_position,
         extra=Candidates.concat([own, Candidates.from_paths(list(extra_paths))]),
     )
+    fresh = np.flatnonzero(~repeated_paths(cands, observations, posed, sensor))
+    if 0 < len(fresh) < len(cands):
+        cands = cands.subset(fresh)
     outcomes: list[Outcomes] = []
     bits: list[np.ndarray] = []
     deadline = deadline or Deadline()
@@ -235,6 +243,41 @@ def analyse(
     motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
     info = information_scores(table)
     return Analysis(posed, cands, found, table, info, motion, truncated)
+
+
+def repeated_paths(
+    cands: Candidates,
+    observations: Sequence[Observation],
+    posed: PosedSet,
+    sensor: SensorBounds,
+) -> np.ndarray:
+    """(C,) bool: does each candidate repeat a path already taken?
+
+    A candidate repeats an observation when it runs the same way (directions
+    within ``2 phi``) along the same line (within ``2 eps_d + min eps_t / 2`` of the
+    observed contact, or of a missed path's point nearest the candidate's aim).
+    Every hypothesis still standing agreed with that observation within its
+    tolerances, so the repeat can only measure it again: it teaches nothing the
+    outcome model could count on (with errors, taking it again loops).
+    """
+    out = np.zeros(len(cands), dtype=bool)
+    if not len(cands) or not observations:
+        return out
+    eps_d, phi = sensor.position_error, sensor.normal_error
+    reach = 2 * eps_d + float(posed.eps_t.min()) / 2 + 1e-9 * posed.scale
+    d = cands.directions
+    for obs in observations:
+        o, u = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
+        same_way = d @ u >= np.cos(2 * phi + 1e-9)
+        if obs.contact is not None:
+            x = np.broadcast_to(np.asarray(obs.contact.point, dtype=float), d.shape)
+        else:  # the missed path's point nearest each candidate's aim
+            along = np.clip((cands.aims - o) @ u, 0.0, obs.path.length)
+            x = o + along[:, None] * u
+        rel = x - cands.origins
+        off = np.abs(rel[:, 0] * d[:, 1] - rel[:, 1] * d[:, 0])
+        out |= same_way & (off <= reach)
+    return out
 
 
 def rank_candidates(
@@ -330,7 +373,8 @@ def plan(
     if not hypotheses:
         if contacts:
             return finish("inconsistent", (), note="no hypothesis explains the contacts")
-        probe = opening_probe(config, workspace, sensor_position, len(observations), gen)
+        missed = [o.path for o in observations]
+        probe = opening_probe(config, _models(models), workspace, sensor_position, missed, gen)
         return finish("awaiting_contact", (probe,))
     classes = len({h.equivalence_class for h in hypotheses})
     if classes == 1:
@@ -358,6 +402,10 @@ def plan(
     )
     paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
     note = ranking.note
+    if not paths:
+        paths, note = _refining(
+            found, hypotheses, _models(models), contacts, sensor, ranking, config.max_paths
+        )
     if found.truncated:
         note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
     return finish(
@@ -370,20 +418,55 @@ def plan(
     )
 
 
-def _planned(found: Analysis, i: int, ranking: Ranking) -> PlannedPath:
+def _refining(
+    found: Analysis,
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    contacts: Sequence[Contact],
+    sensor: SensorBounds,
+    ranking: Ranking,
+    max_paths: int,
+) -> tuple[list[PlannedPath], str | None]:
+    """No informative path: the paths that shrink the expected error disk most
+    (at least by `_REFINE_GAIN` of it), with a note saying so."""
+    refine = refinement(hypotheses, models, found.posed, found.outcomes, contacts, sensor)
+    gain = refine.current - refine.expected
+    ok = np.flatnonzero(gain > _REFINE_GAIN * refine.current)
+    if not len(ok):
+        return [], ranking.note
+    order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))]
+    paths = [
+        _planned(found, int(i), ranking, family=REFINING, expected_eps_t=refine.expected[i])
+        for i in order[:max_paths]
+    ]
+    note = (
+        f"{ranking.note}: refining the pose instead "
+        f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
+    )
+    return paths, note
+
+
+def _planned(
+    found: Analysis,
+    i: int,
+    ranking: Ranking,
+    family: str | None = None,
+    expected_eps_t: float | None = None,
+) -> PlannedPath:
     c, info = found.candidates, found.info
     return PlannedPath(
         origin=(float(c.origins[i, 0]), float(c.origins[i, 1])),
         direction=(float(c.directions[i, 0]), float(c.directions[i, 1])),
         length=float(c.lengths[i]),
         aim=(float(c.aims[i, 0]), float(c.aims[i, 1])),
-        family=FAMILIES[int(info.family[i])],
+        family=family or FAMILIES[int(info.family[i])],
         p_distinguishing=float(info.p_distinguishing[i]),
         p_informative=float(info.p_informative[i]),
         expected_pruning=float(info.expected_pruning[i]),
         expected_remaining=float(ranking.expected_remaining[i]),
         motion_cost=float(found.motion[i]),
         source=str(c.source[i]),
+        expected_eps_t=None if expected_eps_t is None else float(expected_eps_t),
     )
 
 
