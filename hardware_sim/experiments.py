@@ -36,7 +36,8 @@ import numpy as np
 
 from hardware_sim.client import InProcessService, outline_distance, run_recognition
 from hardware_sim.presets import PRESETS, Preset, build_arm, explicit_preset, resolve_preset
-from hardware_sim.world import random_world
+from hardware_sim.world import PLACEMENTS, random_world
+from planner.errors import PlannerError
 from planner.strategies import STRATEGIES, StrategyConfig
 from planner.types import ObjectModel, Workspace
 
@@ -81,6 +82,7 @@ class ExperimentSpec:
     strategy: dict[str, Any] = field(default_factory=dict)
     pose_slack: float = 1e-6
     trial_timeout: float | None = None
+    placement: str = "anywhere"
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.strategies if s not in STRATEGIES]
@@ -90,6 +92,8 @@ class ExperimentSpec:
             raise ValueError(f"--truth {self.truth!r} is not an object of the set")
         if self.trials < 1 or self.max_touches < 1:
             raise ValueError("trials and max_touches must be >= 1")
+        if self.placement not in PLACEMENTS:
+            raise ValueError(f"--placement must be one of {list(PLACEMENTS)}")
 
 
 @dataclass(frozen=True)
@@ -154,7 +158,8 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
     the spec, unless the planner's time budget binds)."""
     models = list(spec.models)
     candidates = [m for m in models if m.name == spec.truth] if spec.truth else models
-    world = random_world(candidates, spec.workspace, np.random.default_rng(_seed(spec, trial, 0)))
+    world_rng = np.random.default_rng(_seed(spec, trial, 0))
+    world = random_world(candidates, spec.workspace, world_rng, spec.placement)
     arm = build_arm(world, spec.preset, _seed(spec, trial, 1))
     config = StrategyConfig.from_dict({**spec.strategy, "name": strategy})
     service = InProcessService(
@@ -363,6 +368,13 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
     p.add_argument("--position-error", type=float, default=None, help="bounded noise (length)")
     p.add_argument("--normal-error", type=float, default=None, help="bounded noise (radians)")
     p.add_argument("--max-touches", type=int, default=20)
+    p.add_argument(
+        "--placement",
+        default="anywhere",
+        choices=PLACEMENTS,
+        help="where the true object lies: anywhere inside the safe circle (default), or "
+        "centred on it as in the thesis' simulations",
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="joblib processes (all cores)")
     where.add_argument("--dask", default=None, metavar="ADDRESS", help="Dask scheduler address")
@@ -447,8 +459,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             max_touches=args.max_touches,
             truth=args.truth,
             trial_timeout=getattr(args, "trial_timeout", None),
+            placement=args.placement,
         )
-    except ValueError as exc:
+    except (ValueError, PlannerError) as exc:
         print(f"tactile simulate: error: {exc}", file=sys.stderr)
         return 2
     update, close = _progress_bar(spec.trials * len(spec.strategies))
@@ -472,7 +485,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"{args.objects}: {len(spec.models)} objects, truth {args.truth or 'random'}, "
         f"sensor {preset.name} (bounds {b.position_error:g}, "
         f"{math.degrees(b.normal_error):g} deg), {spec.trials} trials, seed {spec.seed}, "
-        f"max {spec.max_touches} touches"
+        f"max {spec.max_touches} touches, object placed {spec.placement}"
     )
     print("percent of trials needing N touches (unlocalized: >10)")
     print(format_table(rows))

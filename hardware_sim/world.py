@@ -14,6 +14,7 @@ import numpy as np
 import shapely
 
 from planner.geometry import cast_rays
+from planner.prior import draw_poses, draw_stable_poses
 from planner.types import (
     Contact,
     ObjectModel,
@@ -25,7 +26,10 @@ from planner.types import (
     Workspace,
 )
 
-__all__ = ["World", "random_world"]
+__all__ = ["PLACEMENTS", "World", "random_world"]
+
+#: Where :func:`random_world` puts the object in the safe circle.
+PLACEMENTS = ("anywhere", "centred")
 
 
 @dataclass(frozen=True)
@@ -114,18 +118,25 @@ def path_towards(workspace: Workspace, angle: float, aim: np.ndarray) -> Sensing
 
 
 def random_world(
-    models: list[ObjectModel], workspace: Workspace, rng: np.random.Generator
+    models: list[ObjectModel],
+    workspace: Workspace,
+    rng: np.random.Generator,
+    placement: str = "anywhere",
 ) -> World:
-    """A random true object (equal odds, or its prior), stable pose (by its probability)
-    and pose (uniform orientation, position keeping the object inside the safe circle)."""
-    priors = np.array([m.prior if m.prior is not None else 1.0 for m in models])
-    model = models[int(rng.choice(len(models), p=priors / priors.sum()))]
-    probs = np.array([p.probability for p in model.stable_poses])
-    pose_index = int(rng.choice(len(probs), p=probs / probs.sum()))
-    theta = rng.uniform(-math.pi, math.pi)
+    """A true world drawn from the planner's prior (:mod:`planner.prior`): object by
+    its prior, stable pose by its probability, orientation uniform. `placement`
+    ``anywhere``: position uniform among those keeping the object inside the safe
+    circle (the planner's assumption, so its probabilities can be checked against
+    frequencies); ``centred``: the outline's centroid at the circle's centre (the
+    thesis' simulations, §4.3.6, where the object's place was known and only the
+    probing direction random)."""
+    if placement not in PLACEMENTS:
+        raise ValueError(f"placement must be one of {list(PLACEMENTS)}")
+    ((i, pose_index),) = draw_stable_poses(models, 1, rng)
+    model = models[i]
     stable = model.stable_poses[pose_index]
-    # keep every vertex inside the circle: place the rotated outline's farthest point within it
-    reach = max(workspace.radius - stable.radius - 1e-6 * workspace.radius, 0.0)
-    r, a = reach * math.sqrt(rng.random()), rng.uniform(-math.pi, math.pi)
-    center = np.asarray(workspace.center) + r * np.array([math.cos(a), math.sin(a)])
+    theta_a, t_a = draw_poses(stable, workspace, 1, rng)
+    theta, center = float(theta_a[0]), t_a[0]
+    if placement == "centred":  # v_world = R v + t with R centroid + t = centre
+        center = np.asarray(workspace.center) - Pose(0.0, 0.0, theta).apply([stable.centroid])[0]
     return World(model, pose_index, Pose(float(center[0]), float(center[1]), theta), workspace)

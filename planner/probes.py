@@ -10,6 +10,7 @@ centre of the union area (thesis Exp. I), and the thesis' grid windows from
 from __future__ import annotations
 
 import math
+from collections import Counter
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
@@ -21,6 +22,7 @@ from planner.errors import PlanningNotPossibleError
 from planner.geometry import rotation_matrices
 from planner.plans import PlannedPath, opening_path
 from planner.posed import PosedSet
+from planner.prior import draw_poses, draw_stable_poses
 from planner.scoring import motion_cost
 from planner.types import (
     Contact,
@@ -146,36 +148,19 @@ def _prior_extents(
     centre, of the prior draws of the posed outline that no `missed` path meets."""
     rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
     items = list(models.values())
-    prior = np.array([m.prior if m.prior is not None else 1.0 for m in items])
-    groups = [
-        (m, j, prior[i] / prior.sum())
-        for i, m in enumerate(items)
-        for j in range(len(m.stable_poses))
-    ]
-    weight = np.array(
-        [
-            w * m.stable_poses[j].probability / sum(p.probability for p in m.stable_poses)
-            for m, j, w in groups
-        ]
-    )
-    counts = rng.multinomial(samples, weight / weight.sum())
     lines = shapely.linestrings(
         [[p.origin, np.add(p.origin, np.multiply(p.length, p.direction))] for p in missed]
     )
     centre = np.asarray(workspace.center, dtype=float)
+    drawn = Counter(draw_stable_poses(items, samples, rng))
     lo, hi = [], []
-    for (model, j, _), n in zip(groups, counts, strict=True):
-        if not n:
-            continue
-        stable = model.stable_poses[j]
-        reach = max(workspace.radius - stable.radius, 0.0)
-        r = reach * np.sqrt(rng.random(n))
-        a, theta = rng.uniform(-math.pi, math.pi, (2, n))
-        shift = r[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)  # relative to the centre
+    for (i, j), n in sorted(drawn.items()):
+        stable = items[i].stable_poses[j]
+        theta, t = draw_poses(stable, workspace, n, rng)
         # v_world = R(theta) v + t
-        posed = np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + shift[:, None]
-        met = shapely.intersects(shapely.polygons(posed + centre)[:, None], lines[None]).any(axis=1)
-        proj = posed[~met] @ normal.T  # (n, V, A)
+        posed = np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
+        met = shapely.intersects(shapely.polygons(posed)[:, None], lines[None]).any(axis=1)
+        proj = (posed[~met] - centre) @ normal.T  # (n, V, A)
         lo.append(proj.min(axis=1))
         hi.append(proj.max(axis=1))
     return np.concatenate(lo), np.concatenate(hi)
