@@ -311,6 +311,7 @@ def evaluate(
     s_val = np.where(family[src], s_lo[src] + (offset + 0.5) * cell[src], 0.0)
     theta = fit.theta[src]
     t = fit.t[src] + s_val[:, None] * fit.slide[src]
+    ok = np.ones(len(src), dtype=bool)
     if linearized:
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
@@ -320,7 +321,7 @@ def evaluate(
         # smaller than the estimator's worst case (errors do not add up); keep the smaller
         det = np.flatnonzero(fit.rank2)
         if det.size:
-            set_moved, set_dth = consistent_set_bounds(
+            found = consistent_set_bounds(
                 P,
                 U,
                 faces.normal[face[det]],
@@ -332,18 +333,18 @@ def evaluate(
                 eps_d,
                 phi,
             )
-            set_moved = set_moved + slack
             at = np.flatnonzero(fit.rank2[src])  # rank-2 rows have one sample each
             pos = np.searchsorted(det, src[at])
-            moved[at] = np.minimum(moved[at], set_moved[pos])
-            d_theta[at] = np.minimum(d_theta[at], set_dth[pos] + ANGLE_SLACK)
+            moved[at] = np.minimum(moved[at], found.moved[pos] + slack)
+            d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
+            # no pose keeps every contact within its bounds: the interpretation is out
+            ok[at] &= found.feasible[pos]
         eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
         d_translation = moved[:, 0] + cell[src] / 2
     else:
         eps_t = eps_t0[src] + cell[src]
         d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
         d_theta = d_th[src]
-    ok = np.ones(len(src), dtype=bool)
 
     # model check: each contact on its finite posed face, normal within phi + dtheta
     Rs = rotation_matrices(theta)

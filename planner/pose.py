@@ -32,6 +32,7 @@ from filterpy.kalman import ExtendedKalmanFilter
 from planner.geometry import rotation_matrices, wrap_angle
 
 __all__ = [
+    "ConsistentSet",
     "FitBatch",
     "PoseFilter",
     "consistent_set_bounds",
@@ -355,6 +356,19 @@ class PoseFilter:
         return float(t[0]), float(t[1]), theta
 
 
+@dataclass(frozen=True, eq=False)
+class ConsistentSet:
+    """What the set of poses consistent with the contacts says, per row (K,):
+    `moved` (K, P) the largest displacement of each model point from the fit,
+    `dtheta` the largest rotation from it (both inf where unknown), and `feasible`,
+    False only where no pose at all is consistent (the interpretation is impossible
+    while the errors stay within their bounds)."""
+
+    moved: np.ndarray
+    dtheta: np.ndarray
+    feasible: np.ndarray
+
+
 def consistent_set_bounds(
     points: np.ndarray,
     normals: np.ndarray,
@@ -368,7 +382,7 @@ def consistent_set_bounds(
     phi: float,
     samples: int = 25,
     max_contacts: int = 7,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> ConsistentSet:
     """Largest displacement of model points over every pose CONSISTENT with the
     contacts (set membership), for determined poses; no linearization.
 
@@ -376,20 +390,24 @@ def consistent_set_bounds(
     within phi of its face's posed normal, ``|psi_j - theta' - angle(n_a)| <= phi``
     (an interval of theta'), and its measured point lies within eps_d of the face's
     posed line, ``|n'_j·(p_j - t') - d_a| <= eps_d`` with ``n'_j = R(theta') n_a``:
-    for a fixed theta' that is a polygon of t' (slabs, exact), bounded when two faces
-    are not parallel. The displacement ``|R(theta') v + t' - (R(theta) v + t)|`` of a
-    model point v is convex in t', so its maximum is at a polygon vertex; theta' is
-    swept over its interval at `samples` points, and the largest change between
-    neighbouring samples is added (the sweep's allowance). Unlike the estimator's
-    worst case (:func:`point_bounds`), errors do not add up: every contact shrinks
-    the set.
+    for a fixed theta' that is a polygon of t' (slabs), bounded when two faces are
+    not parallel. theta' is sampled across its interval, `samples` points a step
+    ``delta`` apart; every theta' lies within ``delta / 2`` of a sample, and there
+    its slabs lie inside the sample's slabs widened by ``lever delta / 2``
+    (``lever`` = the outline's radius about the model origin plus eps_d, the
+    farthest a contact can be from t'). The displacement ``|R(theta') v + t' - (R(theta) v + t)|``
+    of a model point v is convex in t', so its maximum over a widened polygon is at
+    a vertex; ``|v| delta / 2`` covers the rotation between samples. Every pose
+    consistent with the contacts is thereby covered: the bounds are sound, and
+    when no widened polygon holds a point the interpretation is impossible. Unlike
+    the estimator's worst case (:func:`point_bounds`), errors do not add up: every
+    contact shrinks the set.
 
     `points`, `normals` (s, 2) measured, or (K, s, 2) per row; `face_normals`
-    (K, s, 2), `face_offsets` (K, s), `assigned` (K, s) as for :func:`fit_batch` (only
-    rows with two non-parallel assigned faces); `theta` (K,), `t` (K, 2) the fits;
-    `model_points` (P, 2). Returns `moved` (K, P) and `dtheta` (K,), inf where no
-    sampled pose is consistent (the caller keeps its other bound). At most the latest
-    `max_contacts` contacts of a row are used (any subset gives a sound, larger set).
+    (K, s, 2), `face_offsets` (K, s), `assigned` (K, s) as for :func:`fit_batch`;
+    `theta` (K,), `t` (K, 2) the fits; `model_points` (P, 2), the outline's
+    vertices among them. Rows whose latest `max_contacts` assigned contacts hold no
+    two non-parallel faces are unknown (inf, feasible): the polygon is unbounded.
     """
     K, s = assigned.shape
     P = len(model_points)
@@ -397,23 +415,26 @@ def consistent_set_bounds(
     normals = np.broadcast_to(normals, (K, s, 2))
     moved = np.full((K, P), np.inf)
     dth = np.full(K, np.inf)
+    feasible = np.ones(K, dtype=bool)
     if K == 0 or s < 2:
-        return moved, dth
+        return ConsistentSet(moved, dth, feasible)
     from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
     use = assigned & (from_end <= max_contacts)
     # theta' interval from the normals
     psi = np.arctan2(normals[..., 1], normals[..., 0])
     face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
     r_ang = wrap_angle(psi - face_angle - theta[:, None])
-    lo = np.where(use, r_ang - phi, -np.inf).max(axis=1)
-    hi = np.where(use, r_ang + phi, np.inf).min(axis=1)
+    slack = 1e-9  # rounding of the measured angles
+    lo = np.where(use, r_ang - phi - slack, -np.inf).max(axis=1)
+    hi = np.where(use, r_ang + phi + slack, np.inf).min(axis=1)
+    lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
     pairs = np.array(np.triu_indices(s, 1)).T  # (Q, 2)
     sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
     per_row = samples * len(pairs) * 4 * max(P, s)
     chunk = max(1, 2_000_000 // per_row)
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))
-        m, d = _sweep(
+        moved[sl], dth[sl], feasible[sl] = _sweep(
             points[sl],
             face_normals[sl],
             face_offsets[sl],
@@ -424,12 +445,12 @@ def consistent_set_bounds(
             hi[sl],
             model_points,
             eps_d,
+            lever,
             samples,
             pairs,
             sides,
         )
-        moved[sl], dth[sl] = m, d
-    return moved, dth
+    return ConsistentSet(moved, dth, feasible)
 
 
 def _sweep(
@@ -443,48 +464,51 @@ def _sweep(
     hi: np.ndarray,
     model_points: np.ndarray,
     eps_d: float,
+    lever: float,
     samples: int,
     pairs: np.ndarray,
     sides: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`consistent_set_bounds` on one chunk of rows."""
-    frac = np.linspace(0.0, 1.0, samples)
-    d_theta = lo[:, None] + (hi - lo)[:, None] * frac  # (K, N) offsets from the fit
+    empty_range = hi < lo
+    span = np.where(empty_range, 0.0, hi - lo)
+    delta = span / (samples - 1)  # (K,) step between samples
+    d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)  # offsets from the fit
     R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
     n = np.einsum("knij,ksj->knsi", R, face_normals)  # posed normals (K, N, s, 2)
-    centre = (
-        np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
-    )  # n'·t' = centre ± eps
+    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]  # n'·t' = centre ± w
+    width = eps_d + lever * delta / 2  # (K,) slab half-width, widened for the step
     i, j = pairs[:, 0], pairs[:, 1]
     a, b = n[:, :, i], n[:, :, j]  # (K, N, Q, 2)
     det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
     good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    bounded = good.any(axis=(1, 2)) & ~empty_range
     det = np.where(good, det, 1.0)
-    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
+    w = width[:, None, None, None]
+    ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + w * sides[:, 1]
     vx = (ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]
     vy = (a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]
     vert = np.stack([vx, vy], axis=-1)  # (K, N, Q, 4, 2) candidate translations t'
     proj = np.einsum("knsi,knqvi->knqvs", n, vert)
     tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
-    inside = np.abs(proj - centre[:, :, None, None, :]) <= eps_d + tol[:, :, None, None, :]
+    inside = np.abs(proj - centre[:, :, None, None, :]) <= (
+        width[:, None, None, None, None] + tol[:, :, None, None, :]
+    )
     ok = good[..., None] & np.all(inside | ~use[:, None, None, None, :], axis=-1)
-    ok &= (hi >= lo)[:, None, None, None]
+    ok &= ~empty_range[:, None, None, None]
     # displacement of each model point: R' v + t' - (R v + t)
     fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
     posed = np.einsum("knij,pj->knpi", R, model_points)  # (K, N, P, 2)
     disp = vert[:, :, :, :, None, :] + posed[:, :, None, None] - fit_pts[:, None, None, None]
     norm = np.where(ok[..., None], np.linalg.norm(disp, axis=-1), -np.inf)
-    per_sample = norm.max(axis=(2, 3))  # (K, N, P)
+    radius = np.hypot(*np.asarray(model_points, dtype=float).T)  # (P,) |v|
+    moved = norm.max(axis=(1, 2, 3)) + radius[None] * delta[:, None] / 2  # (K, P)
     feasible = ok.any(axis=(2, 3))  # (K, N)
-    # sweep allowance: the largest change between neighbouring consistent samples
-    both = feasible[:, 1:] & feasible[:, :-1]
-    finite = np.where(feasible[..., None], per_sample, 0.0)
-    step = np.where(both[..., None], np.abs(np.diff(finite, axis=1)), 0.0).max(axis=1)
-    moved = per_sample.max(axis=1) + step
     ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
-    dth = ang + (hi - lo) / (samples - 1)
-    empty = ~feasible.any(axis=1)
-    moved[empty] = np.inf
-    dth[empty] = np.inf
-    return moved, dth
+    dth = ang + delta / 2
+    some = feasible.any(axis=1)
+    unknown = ~bounded & ~empty_range
+    moved[~some | unknown] = np.inf
+    dth[~some | unknown] = np.inf
+    return moved, dth, some | unknown

@@ -127,7 +127,7 @@ def refinement(
             # the recognition's bounds (planner.interpretation.evaluate), on determined rows
             second = phi**2 * stable.centroid_radius + phi * eps_d
             moved = point_bounds(fit, stable.outline, assigned, eps_d, phi, det) * (1 + phi)
-            swept, _ = consistent_set_bounds(
+            swept = consistent_set_bounds(
                 points[det],
                 normals[det],
                 faces.normal[face[det]],
@@ -140,7 +140,7 @@ def refinement(
                 phi,
                 samples=_SWEEP_SAMPLES,
             )
-            eps_t = 2 * np.minimum(moved + second, swept).max(axis=1)
+            eps_t = 2 * np.minimum(moved + second, swept.moved).max(axis=1)
             rows = (c_idx[det], k_idx[det])
             after[rows] = np.minimum(after[rows], eps_t)
     weight = posed.class_weight

@@ -112,8 +112,9 @@ def test_per_row_contacts_give_the_shared_fit(name, seed, count):
     args = (fn, fo, assigned, shared.theta, shared.t, stable.outline, 1.0, math.radians(5))
     a = consistent_set_bounds(P, U, *args)
     b = consistent_set_bounds(P[None], U[None], *args)
-    np.testing.assert_allclose(a[0], b[0])
-    np.testing.assert_allclose(a[1], b[1])
+    np.testing.assert_allclose(a.moved, b.moved)
+    np.testing.assert_allclose(a.dtheta, b.dtheta)
+    assert a.feasible.tolist() == b.feasible.tolist() == [True]
 
 
 @pytest.mark.parametrize("name", SET_NAMES)
@@ -128,7 +129,7 @@ def test_consistent_set_bound_covers_the_true_pose(name, seed, count):
     obs, faces = _touches(world, bounds, rng, count)
     fit = _fit(world, obs, faces, bounds)
     stable = world.stable
-    moved, dtheta = consistent_set_bounds(
+    found = consistent_set_bounds(
         np.array([o.contact.point for o in obs]),
         np.array([o.contact.normal for o in obs]),
         stable.faces.normal[faces][None],
@@ -142,5 +143,6 @@ def test_consistent_set_bound_covers_the_true_pose(name, seed, count):
     )
     fitted = Pose(float(fit.t[0, 0]), float(fit.t[0, 1]), float(fit.theta[0]))
     true_move = np.hypot(*(world.pose.apply(stable.outline) - fitted.apply(stable.outline)).T)
-    assert np.all(true_move <= moved[0] + 1e-6)
-    assert abs(math.remainder(world.pose.theta - fit.theta[0], 2 * math.pi)) <= dtheta[0] + 1e-9
+    assert found.feasible[0]
+    assert np.all(true_move <= found.moved[0] + 1e-6)
+    assert abs(math.remainder(world.pose.theta - fit.theta[0], 2 * math.pi)) <= found.dtheta[0]
