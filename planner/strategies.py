@@ -69,6 +69,7 @@ __all__ = [
     "StrategyConfig",
     "analyse",
     "opening_path",
+    "pin_families",
     "plan",
     "rank_candidates",
     "repeated_paths",
@@ -235,7 +236,15 @@ def analyse(
                 posed, part.origins, part.directions, part.lengths, sensor, config.outcome
             )
         )
-        bits.append(class_bits(posed, outcomes[-1], sensor, config.outcome))
+        bits.append(
+            pin_families(
+                hypotheses,
+                posed,
+                outcomes[-1],
+                class_bits(posed, outcomes[-1], sensor, config.outcome),
+                sensor,
+            )
+        )
     found = Outcomes.concat(outcomes)
     truncated = len(found.hit) < len(cands)
     cands = cands.subset(np.arange(len(found.hit)))
@@ -243,6 +252,68 @@ def analyse(
     motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
     info = information_scores(table)
     return Analysis(posed, cands, found, table, info, motion, truncated)
+
+
+def pin_families(
+    hypotheses: Sequence[Hypothesis],
+    posed: PosedSet,
+    outcomes: Outcomes,
+    bits: np.ndarray,
+    sensor: SensorBounds,
+) -> np.ndarray:
+    """Survivor bits (C, K, W) with the samples of one slide family told apart
+    where a path pins the family.
+
+    A family (touched faces all parallel, DESIGN §4.6) is sampled along its slide,
+    one class per sample. When a path meets two samples surely (no vertex, grazing
+    or end-of-path doubt) on the same face, not parallel to the touched ones, the
+    contact fixes the slide: the family becomes one determined pose, the sample
+    the truth is, and the other sample does not survive as a class of its own.
+    Their disks (which carry the sample spacing) would otherwise call them
+    confusable, and the touch that ends the family would never look
+    distinguishing.
+    """
+    # a family: one interpretation (object, stable pose, faces touched, all parallel)
+    tol = math.sin(2 * sensor.normal_error + 1e-6)
+    assigned = np.array([[-1 if a is None else a for a in h.assignment] for h in hypotheses])
+    if assigned.size == 0:
+        return bits
+    on = assigned >= 0
+    first = np.argmax(on, axis=1)
+    rows = np.arange(len(hypotheses))
+    n = posed.normal[rows[:, None], np.maximum(assigned, 0)]  # (H, s, 2)
+    u = n[rows, first]  # (H, 2): a touched face's posed normal
+    cross = np.abs(n[..., 0] * u[:, None, 1] - n[..., 1] * u[:, None, 0])
+    parallel = on.any(axis=1) & np.all(~on | (cross <= tol), axis=1)
+    ident: dict[tuple, int] = {}
+    label = [ident.setdefault((h.family, h.object, h.stable_pose), len(ident)) for h in hypotheses]
+    _, family = np.unique(np.column_stack([label, assigned]), axis=0, return_inverse=True)
+    family = np.where(parallel, family.ravel(), -1)
+    members = np.bincount(posed.cls, minlength=posed.n_classes)
+    # classes of one hypothesis, sampled from a family with siblings
+    solo = (members[posed.cls] == 1) & (family >= 0)
+    siblings = np.unique(family[solo], return_counts=True)
+    shared = siblings[0][siblings[1] > 1]
+    if not len(shared):
+        return bits
+    bits = bits.copy()
+    sure = outcomes.hit & ~outcomes.vertex & ~outcomes.grazing & ~outcomes.end_of_path  # (C, H)
+    for f in shared:
+        hs = np.flatnonzero(solo & (family == f))
+        hit_n = outcomes.normal[:, hs]  # (C, S, 2)
+        un = u[hs[0]]  # the family's touched faces are all parallel to it
+        pins = sure[:, hs] & (np.abs(hit_n[..., 0] * un[1] - hit_n[..., 1] * un[0]) > tol)
+        same = (outcomes.face[:, hs, None] == outcomes.face[:, None, hs]) & (
+            pins[:, :, None] & pins[:, None, :]
+        )  # (C, S, S): the sample pair is pinned apart on that path
+        for b, h in enumerate(hs):
+            k = int(posed.cls[h])
+            word, bit = k // 64, np.uint64(1) << np.uint64(k % 64)
+            rows = posed.cls[hs]
+            apart = same[:, :, b]
+            apart[:, b] = False
+            bits[:, rows, word] &= np.where(apart, ~bit, ~np.uint64(0))
+    return bits
 
 
 def repeated_paths(

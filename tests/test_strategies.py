@@ -337,3 +337,39 @@ def test_no_candidate_at_all(name):
     )
     assert result.status == "ambiguous" and result.candidates == 0 and not result.paths
     assert "no informative path" in result.note
+
+
+def _slide_family(family_ids):
+    # one contact on the square's top face (face 2, normal +y): samples slide along x,
+    # 4 apart, each disk (6) wider than the spacing
+    return [
+        Hypothesis("square", 0, (2,), Pose(x, 0, 0), ErrorBound(3.0, 0.0, 6.0), 0.2, i, f)
+        for i, (x, f) in enumerate(zip([-8, -4, 0, 4, 8], family_ids, strict=True))
+    ]
+
+
+def test_a_path_across_a_slide_family_pins_it():
+    touched = [Observation(PATH_A, Contact((0.0, 20.0), (0.0, 1.0)))]
+    side = SensingPath((100.0, 10.0), (-1.0, 0.0), 200.0)  # meets the right faces
+    down = SensingPath((10.0, 100.0), (0.0, -1.0), 200.0)  # meets the top face again
+    found = {}
+    for name, ids in (("family", [7] * 5), ("unrelated", range(5))):
+        found[name] = analyse(
+            _slide_family(ids),
+            MODELS,
+            SENSOR,
+            WORKSPACE,
+            (100.0, 0.0),
+            StrategyConfig(**FAST),
+            observations=touched,
+            extra_paths=[side, down],
+        )
+    for name, f in found.items():
+        i_side, i_down = np.flatnonzero(f.candidates.source == "extra")[:2]
+        p_side = f.info.p_distinguishing[i_side]
+        if name == "family":  # the side contact fixes the slide: one pose is left
+            assert p_side == pytest.approx(1.0)
+        else:  # separate interpretations 4 apart with 6-wide disks stay confusable
+            assert p_side < 1.0
+        # a touch parallel to the one made pins nothing
+        assert f.info.p_distinguishing[i_down] < 1.0
