@@ -11,8 +11,11 @@ from __future__ import annotations
 import hashlib
 import json
 import math
+import uuid
 from collections.abc import Mapping
 from typing import Any
+
+import numpy as np
 
 from app.schemas import (
     ErrorBoundOut,
@@ -42,6 +45,7 @@ __all__ = [
     "observation_from_dict",
     "observation_to_dict",
     "plan_out",
+    "plan_rng",
     "session_out",
     "strategy_config",
 ]
@@ -106,6 +110,15 @@ def build_session(record: SessionRecord) -> Session:
 def derive(session: Session) -> Session:
     session.hypotheses  # noqa: B018 - compute (and cache) the derived state here, in a thread
     return session
+
+
+def plan_rng(session_id: str, version: int, seed: int | None) -> np.random.Generator:
+    """The random stream of the plan at `version`: ``default_rng([seed, version])`` with
+    the session's strategy seed, else seeded from the session id (so every worker
+    process makes the same plan for the same version)."""
+    if seed is None:
+        seed = uuid.UUID(session_id).int % (2**63)
+    return np.random.default_rng([seed, version])
 
 
 def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:

@@ -37,6 +37,7 @@ from app.convert import (
     observation_from_dict,
     observation_to_dict,
     plan_out,
+    plan_rng,
     session_out,
     strategy_config,
 )
@@ -106,7 +107,7 @@ class SessionService:
         self.db = anyio.CapacityLimiter(settings.db_pool_size)
         self.locks = KeyedLocks()
         self.sessions: LRU[tuple[str, int], Session] = LRU(settings.session_cache_size)
-        self.plans: LRU[tuple[str, int], Plan] = LRU(settings.plan_cache_size)
+        self.plans: LRU[tuple[Any, ...], Plan] = LRU(settings.plan_cache_size)
         self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
         self._in_flight: set[tuple[str, str]] = set()
         self._render_lock = threading.Lock()  # matplotlib: one figure drawn at a time
@@ -391,33 +392,43 @@ class SessionService:
                 self._forget(session_id)
 
     # -- plans and pictures -----------------------------------------------------------------
-    async def _plan(self, record: SessionRecord, session: Session) -> Plan:
-        key = (record.id, record.version)
+    async def _plan(
+        self,
+        record: SessionRecord,
+        session: Session,
+        position: tuple[float, float] | None = None,
+    ) -> Plan:
+        """The plan for the record's version from `position` (None: the session's
+        sensor_position), cached per (id, version, position)."""
+        key = (record.id, record.version, position)
         cached = self.plans.get(key)
         if cached is not None:
             return cached
         cfg = record.config
-        seed = uuid.UUID(record.id).int % (2**63) ^ record.version
+        rng = plan_rng(record.id, record.version, cfg["strategy"].get("seed"))
+        sensor_position = cfg["sensor_position"] if position is None else list(position)
         result = await self.run_cpu(
             lambda: plan(
                 session.hypotheses,
                 session.models,
                 session.sensor,
                 session.workspace,
-                cfg["sensor_position"],
+                sensor_position,
                 strategy_config(cfg),
-                seed,
+                rng,
                 observations=session.observations,
             )
         )
         self.plans.put(key, result)
         return result
 
-    async def get_plan(self, session_id: str, limit: int) -> Answer:
+    async def get_plan(
+        self, session_id: str, limit: int, position: tuple[float, float] | None = None
+    ) -> Answer:
         async with self.locks.hold(session_id):
             record = await self._record(session_id)
             session = await self._session(record)
-            result = await self._plan(record, session)
+            result = await self._plan(record, session, position)
         out = plan_out(result, record.version, limit)
         return Answer(200, _json(out), {"ETag": etag(record.version)})
 
