@@ -38,8 +38,10 @@ from planner.types import Contact, Observation, SensingPath, SensorBounds, Works
 
 __all__ = [
     "build_session",
+    "catch_up",
     "derive",
     "etag",
+    "extends",
     "fingerprint",
     "if_match_ok",
     "observation_from_dict",
@@ -105,6 +107,29 @@ def build_session(record: SessionRecord) -> Session:
         RecognitionConfig(max_outliers=cfg["max_outliers"]),
         [observation_from_dict(o) for o in record.observations],
     )
+
+
+def extends(session: Session, record: SessionRecord) -> bool:
+    """True when `session`'s observations are the first ones of `record` (as stored:
+    the comparison is exact, on the JSON form the store keeps)."""
+    n = len(session.observations)
+    return n <= len(record.observations) and all(
+        observation_to_dict(mine) == stored
+        for mine, stored in zip(session.observations, record.observations[:n], strict=True)
+    )
+
+
+def catch_up(base: Session | None, record: SessionRecord) -> Session:
+    """The record's session from `base`, a derived session of the same session id whose
+    observations are a prefix of the record's (see :func:`extends`): the remaining
+    observations extend its interpretation tree one by one, as if this process had
+    seen them arrive. Without a base, the session is rebuilt from all observations."""
+    if base is None:
+        return build_session(record)
+    session = base
+    for stored in record.observations[len(base.observations) :]:
+        session = session.observe(observation_from_dict(stored))
+    return session
 
 
 def derive(session: Session) -> Session:

@@ -31,8 +31,10 @@ from pydantic import BaseModel
 from app.cache import LRU, KeyedLocks
 from app.convert import (
     build_session,
+    catch_up,
     derive,
     etag,
+    extends,
     if_match_ok,
     observation_from_dict,
     observation_to_dict,
@@ -153,13 +155,24 @@ class SessionService:
         return record
 
     async def _session(self, record: SessionRecord) -> Session:
-        """The derived session of a record (cached per version; caller holds the lock)."""
+        """The derived session of a record (cached per version; caller holds the lock).
+
+        On a miss (another worker process wrote the newer versions, or this one
+        restarted) the newest cached version of the session whose observations
+        begin the record's is extended by the missing ones instead of re-deriving
+        the whole tree from the first observation."""
         key = (record.id, record.version)
         session = self.sessions.get(key)
         if session is None:
-            session = await self.run_cpu(lambda: derive(build_session(record)))
+            base = self._newest_prefix(record)
+            session = await self.run_cpu(lambda: derive(catch_up(base, record)))
             self.sessions.put(key, session)
         return session
+
+    def _newest_prefix(self, record: SessionRecord) -> Session | None:
+        mine = [s for (sid, _), s in self.sessions.items() if sid == record.id]
+        usable = [s for s in mine if extends(s, record)]
+        return max(usable, key=lambda s: len(s.observations), default=None)
 
     def _forget(self, session_id: str) -> None:
         self.sessions.drop(lambda k: k[0] == session_id)
