@@ -16,6 +16,7 @@ from collections.abc import Mapping
 from typing import Any
 
 import numpy as np
+import pydantic_core
 
 from app.schemas import (
     ErrorBoundOut,
@@ -48,6 +49,7 @@ __all__ = [
     "observation_to_dict",
     "plan_out",
     "plan_rng",
+    "session_json",
     "session_out",
     "strategy_config",
 ]
@@ -200,6 +202,75 @@ def session_out(
         hypothesis_count=len(hyps),
         class_count=len({h.equivalence_class for h in hyps}),
     )
+
+
+def _floats(values: Any) -> list[float]:
+    return [float(v) for v in values]
+
+
+def session_json(
+    session_id: str, version: int, cfg: Mapping[str, Any], session: Session, limit: int | None
+) -> bytes:
+    """``session_out(...).model_dump_json()``, byte for byte, without building and
+    validating one pydantic model per hypothesis and observation (the answer to
+    every observation; a test holds the two equal)."""
+    hyps = session.hypotheses
+    shown = hyps if limit is None else hyps[:limit]
+    s, ws, st = cfg["sensor"], cfg["workspace"], cfg["strategy"]
+    observations = []
+    for i, o in enumerate(session.observations):
+        p, c = o.path, o.contact
+        contact = None
+        if c is not None:
+            z = None if c.normal_z is None else float(c.normal_z)
+            contact = {"point": _floats(c.point), "normal": _floats(c.normal), "normal_z": z}
+        path = {"origin": _floats(p.origin), "direction": _floats(p.direction)}
+        observations.append(
+            {"index": i, "path": {**path, "length": float(p.length)}, "contact": contact}
+        )
+    data = {
+        "id": session_id,
+        "version": int(version),
+        "status": session.status,
+        "objects": [m.name for m in session.models],
+        "sensor": {
+            "position_error": float(s["position_error"]),
+            "normal_error": float(s["normal_error"]),
+        },
+        "workspace": {"center": _floats(ws["center"]), "radius": float(ws["radius"])},
+        "sensor_position": _floats(cfg["sensor_position"]),
+        "strategy": {
+            "name": str(st["name"]),
+            "depth": int(st["depth"]),
+            "budget_ms": float(st["budget_ms"]),
+            "max_paths": int(st["max_paths"]),
+            "motion_weight": float(st["motion_weight"]),
+            "grid_size": int(st["grid_size"]),
+            "seed": None if st.get("seed") is None else int(st["seed"]),
+        },
+        "max_outliers": int(cfg["max_outliers"]),
+        "observations": observations,
+        "hypotheses": [
+            {
+                "object": h.object,
+                "stable_pose": int(h.stable_pose),
+                "pose": {"x": float(h.pose.x), "y": float(h.pose.y), "theta": float(h.pose.theta)},
+                "error_bound": {
+                    "translation": _finite(h.error_bound.translation),
+                    "rotation": _finite(h.error_bound.rotation),
+                    "eps_t": _finite(h.error_bound.eps_t),
+                },
+                "probability": min(max(float(h.probability), 0.0), 1.0),
+                "assignment": [None if f is None else int(f) for f in h.assignment],
+                "equivalence_class": int(h.equivalence_class),
+            }
+            for h in shown
+        ],
+        "hypothesis_count": len(hyps),
+        "class_count": len({h.equivalence_class for h in hyps}),
+    }
+    # inf/nan as null: what pydantic's model_dump_json writes
+    return pydantic_core.to_json(data, inf_nan_mode="null")
 
 
 def plan_out(result: Plan, version: int, limit: int) -> PlanOut:

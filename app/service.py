@@ -40,7 +40,7 @@ from app.convert import (
     observation_to_dict,
     plan_out,
     plan_rng,
-    session_out,
+    session_json,
     strategy_config,
 )
 from app.errors import (
@@ -96,7 +96,7 @@ def _next_state(
 ) -> tuple[Session, bytes]:
     """The session after `step`, derived, and its JSON at the next version (in a thread)."""
     new = derive(step(record, current))
-    return new, _json(session_out(record.id, record.version + 1, record.config, new, limit))
+    return new, session_json(record.id, record.version + 1, record.config, new, limit)
 
 
 class SessionService:
@@ -258,7 +258,7 @@ class SessionService:
             strategy_config(cfg)  # the planner's own checks
             record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
             session = await self.run_cpu(lambda: derive(build_session(record)))
-            body = await self.run_cpu(lambda: _json(session_out(record.id, 1, cfg, session, limit)))
+            body = await self.run_cpu(lambda: session_json(record.id, 1, cfg, session, limit))
             headers = {"ETag": etag(1), "Location": f"/v1/sessions/{record.id}"}
             answer = Answer(201, body, headers)
             idem = self._idem(scope, idem_key, fp, answer)
@@ -280,7 +280,7 @@ class SessionService:
             record = await self._record(session_id)
             session = await self._session(record)
         body = await self.run_cpu(
-            lambda: _json(session_out(session_id, record.version, record.config, session, limit))
+            lambda: session_json(session_id, record.version, record.config, session, limit)
         )
         return Answer(200, body, {"ETag": etag(record.version)})
 
