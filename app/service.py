@@ -6,8 +6,11 @@ draws); this module only moves data between the store, the planner and JSON,
 and decides where work runs:
 
 - CPU work (fits, plans, pictures) runs in worker threads behind one
-  :class:`anyio.CapacityLimiter` (``cpu_workers``); SQLite calls run in threads
-  behind another (``db_pool_size``); the event loop never blocks.
+  :class:`anyio.CapacityLimiter` (``cpu_workers``); encoding an answer behind a
+  second one of the same size, so that a read does not wait behind plans; SQLite
+  calls run in threads behind a third (``db_pool_size``); the event loop never
+  blocks. A request makes as few trips to the CPU workers as it can (under load
+  each trip waits for a free worker).
 - One lock per session id: two requests on one session never compute on stale
   state; across worker processes the store's version compare-and-swap does the
   same (a lost race is recomputed, or answered 412 when the client sent If-Match).
@@ -107,6 +110,7 @@ class SessionService:
         self.store = store
         self.cpu = anyio.CapacityLimiter(settings.cpu_workers)
         self.db = anyio.CapacityLimiter(settings.db_pool_size)
+        self.light = anyio.CapacityLimiter(settings.cpu_workers)
         self.locks = KeyedLocks()
         self.sessions: LRU[tuple[str, int], Session] = LRU(settings.session_cache_size)
         self.plans: LRU[tuple[Any, ...], Plan] = LRU(settings.plan_cache_size)
@@ -117,6 +121,10 @@ class SessionService:
     # -- running work off the event loop ----------------------------------------------------
     async def run_cpu(self, fn: Callable[..., _T], *args: Any) -> _T:
         return await anyio.to_thread.run_sync(fn, *args, limiter=self.cpu)
+
+    async def run_light(self, fn: Callable[..., _T], *args: Any) -> _T:
+        """Short CPU work (encoding an answer) that should not queue behind plans."""
+        return await anyio.to_thread.run_sync(fn, *args, limiter=self.light)
 
     async def run_db(self, fn: Callable[..., _T], *args: Any) -> _T:
         return await anyio.to_thread.run_sync(fn, *args, limiter=self.db)
@@ -200,34 +208,35 @@ class SessionService:
         return created, model.name
 
     # -- sessions ---------------------------------------------------------------------------
-    async def _models(self, refs: Sequence[str | dict[str, Any]]) -> list[ObjectModel]:
+    async def _stored_objects(self, refs: Sequence[str | dict[str, Any]]) -> dict[str, Any]:
         names = [r for r in refs if isinstance(r, str)]
-        stored = await self.run_db(self.store.get_objects, names) if names else {}
+        return await self.run_db(self.store.get_objects, names) if names else {}
 
-        def build() -> list[ObjectModel]:
-            models = []
-            for i, ref in enumerate(refs):
-                if isinstance(ref, str):
-                    if ref not in stored:
-                        raise InvalidInputError(
-                            f"no registered object named {ref!r}; register it with "
-                            "POST /v1/objects or give it inline",
-                            field=f"objects[{i}]",
-                        )
-                    models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
-                else:
-                    models.append(object_from_dict(ref, field=f"objects[{i}]"))
-            seen: dict[str, int] = {}
-            for i, m in enumerate(models):
-                if m.name in seen:
+    @staticmethod
+    def _build_models(
+        refs: Sequence[str | dict[str, Any]], stored: dict[str, Any]
+    ) -> list[ObjectModel]:
+        models = []
+        for i, ref in enumerate(refs):
+            if isinstance(ref, str):
+                if ref not in stored:
                     raise InvalidInputError(
-                        f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                        f"no registered object named {ref!r}; register it with "
+                        "POST /v1/objects or give it inline",
                         field=f"objects[{i}]",
                     )
-                seen[m.name] = i
-            return models
-
-        return await self.run_cpu(build)
+                models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
+            else:
+                models.append(object_from_dict(ref, field=f"objects[{i}]"))
+        seen: dict[str, int] = {}
+        for i, m in enumerate(models):
+            if m.name in seen:
+                raise InvalidInputError(
+                    f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                    field=f"objects[{i}]",
+                )
+            seen[m.name] = i
+        return models
 
     async def create_session(
         self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None
@@ -236,31 +245,37 @@ class SessionService:
         with self._claim(scope, idem_key):
             if idem_key and (old := await self.run_db(self.store.get_idempotent, scope, idem_key)):
                 return self._replay(old, fp)
-            models = await self._models(body["objects"])
-            ws = body["workspace"]
-            workspace = Workspace(tuple(ws["center"]), ws["radius"])
-            sensor = SensorBounds(**body["sensor"])
-            position = body.get("sensor_position") or [
-                workspace.center[0] + workspace.radius,
-                workspace.center[1],
-            ]
-            cfg = {
-                "objects": [object_to_dict(m) for m in models],
-                "sensor": {
-                    "position_error": sensor.position_error,
-                    "normal_error": sensor.normal_error,
-                },
-                "workspace": {"center": list(workspace.center), "radius": workspace.radius},
-                "sensor_position": [float(v) for v in position],
-                "strategy": dict(body["strategy"]),
-                "max_outliers": body["max_outliers"],
-            }
-            strategy_config(cfg)  # the planner's own checks
-            record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
-            session = await self.run_cpu(lambda: derive(build_session(record)))
-            body = await self.run_cpu(lambda: session_json(record.id, 1, cfg, session, limit))
+            stored = await self._stored_objects(body["objects"])
+
+            def prepare() -> tuple[SessionRecord, Session, bytes]:
+                # one trip to the CPU workers: under load each trip waits behind plans
+                models = self._build_models(body["objects"], stored)
+                ws = body["workspace"]
+                workspace = Workspace(tuple(ws["center"]), ws["radius"])
+                sensor = SensorBounds(**body["sensor"])
+                position = body.get("sensor_position") or [
+                    workspace.center[0] + workspace.radius,
+                    workspace.center[1],
+                ]
+                cfg = {
+                    "objects": [object_to_dict(m) for m in models],
+                    "sensor": {
+                        "position_error": sensor.position_error,
+                        "normal_error": sensor.normal_error,
+                    },
+                    "workspace": {"center": list(workspace.center), "radius": workspace.radius},
+                    "sensor_position": [float(v) for v in position],
+                    "strategy": dict(body["strategy"]),
+                    "max_outliers": body["max_outliers"],
+                }
+                strategy_config(cfg)  # the planner's own checks
+                record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
+                session = derive(build_session(record))
+                return record, session, session_json(record.id, 1, cfg, session, limit)
+
+            record, session, answer_body = await self.run_cpu(prepare)
             headers = {"ETag": etag(1), "Location": f"/v1/sessions/{record.id}"}
-            answer = Answer(201, body, headers)
+            answer = Answer(201, answer_body, headers)
             idem = self._idem(scope, idem_key, fp, answer)
             if (old := await self.run_db(self.store.create_session, record, idem)) is not None:
                 return self._replay(old, fp)
@@ -279,8 +294,8 @@ class SessionService:
         async with self.locks.hold(session_id):
             record = await self._record(session_id)
             session = await self._session(record)
-        body = await self.run_cpu(
-            lambda: session_json(session_id, record.version, record.config, session, limit)
+        body = await self.run_light(
+            session_json, session_id, record.version, record.config, session, limit
         )
         return Answer(200, body, {"ETag": etag(record.version)})
 
