@@ -34,6 +34,10 @@ class LRU(Generic[K, V]):
         while len(self._data) > self.size:
             self._data.popitem(last=False)
 
+    def items(self) -> list[tuple[K, V]]:
+        """The entries, least recently used first (their recency is not changed)."""
+        return list(self._data.items())
+
     def drop(self, predicate: Callable[[K], bool]) -> None:
         for key in [k for k in self._data if predicate(k)]:
             del self._data[key]

@@ -110,10 +110,43 @@ def _print_planning(plans: list[dict], strategies: Sequence[str]) -> None:
     print("hyps, cands: mean/max over trials; * some plans cut short by the time budget")
 
 
+def _picture(value: str) -> str:
+    if Path(value).suffix.lower() not in (".png", ".svg"):
+        raise argparse.ArgumentTypeError("must end in .png or .svg")
+    return value
+
+
 def cmd_demo(args: argparse.Namespace) -> int:
+    """Start the service on embedded defaults (SQLite in a temporary folder, a free
+    loopback port) unless given `--url`, and run one recognition against it over HTTP."""
+    import contextlib
+    import tempfile
+    import time
+
+    from app.serve import serve_in_thread
+    from app.settings import Settings
     from hardware_sim.demo import run_demo
 
-    return run_demo(args.objects, args.seed, args.max_touches, out=sys.stdout)
+    objects = args.objects if args.objects.endswith(".json") else embedded_set(args.objects)
+    picture = Path(args.out)
+
+    def demo(url: str) -> int:
+        code = run_demo(url, str(objects), args.seed, args.max_touches, sys.stdout, picture,
+                        args.sensor)  # fmt: skip
+        if args.linger > 0:
+            print(f"serving for {args.linger:g} s more (Ctrl-C stops)", flush=True)
+            with contextlib.suppress(KeyboardInterrupt):
+                time.sleep(args.linger)
+        return code
+
+    if args.url:
+        return demo(args.url.rstrip("/"))
+    with tempfile.TemporaryDirectory(prefix="tactile-demo-") as tmp:
+        settings = Settings(
+            db_path=Path(tmp) / "demo.db", api_key=None, log_level="warning", log_json=False
+        )
+        with serve_in_thread(settings) as url:
+            return demo(url)
 
 
 def cmd_import_mesh(args: argparse.Namespace) -> int:
@@ -136,10 +169,25 @@ def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(prog="tactile", description=__doc__)
     sub = parser.add_subparsers(dest="command", required=True)
 
-    demo = sub.add_parser("demo", help="one recognition of a randomly posed object, step by step")
+    demo = sub.add_parser(
+        "demo", help="start the service, recognize one randomly posed object over HTTP"
+    )
     demo.add_argument("--objects", default="thesis_like", help="object file or embedded set name")
-    demo.add_argument("--seed", type=int, default=7)
+    demo.add_argument("--seed", type=int, default=7, help="the world, the sensor and the plans")
     demo.add_argument("--max-touches", type=int, default=12)
+    demo.add_argument(
+        "--sensor",
+        choices=["bounded", "ideal", "thesis_sensor"],
+        default="bounded",
+        help="bounded: errors within 1 mm and 3 degrees (default); or a hardware preset",
+    )
+    demo.add_argument(
+        "--out", type=_picture, default="tactile-demo.png", help="the final picture (.png or .svg)"
+    )
+    demo.add_argument("--url", default=None, help="use a running service instead of starting one")
+    demo.add_argument(
+        "--linger", type=float, default=0.0, help="keep serving this many s for the live view"
+    )
     demo.set_defaults(func=cmd_demo)
 
     bench = sub.add_parser("bench", help="recognition and planning benchmarks")

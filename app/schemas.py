@@ -128,6 +128,7 @@ class StrategyOut(BaseModel):
     max_paths: int
     motion_weight: float
     grid_size: int
+    seed: int | None = None
 
 
 class SessionOut(BaseModel):
@@ -299,6 +300,13 @@ def input_models(settings: Settings) -> InputModels:
         )
         motion_weight: Annotated[float, Field(ge=0, le=1e6)] = 0.0
         grid_size: Annotated[int, Field(ge=10, le=200)] = 70
+        seed: Annotated[int, Field(ge=0, le=2**63 - 1)] | None = Field(
+            None,
+            description=(
+                "seeds the planner's random choices: the plan at session version v draws "
+                "from numpy's default_rng([seed, v]); null: a seed drawn from the session id"
+            ),
+        )
 
     ObjectRef = Annotated[
         Annotated[Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],

@@ -18,10 +18,26 @@ import os
 import shutil
 import socket
 import tempfile
+import threading
+import time
+from collections.abc import Iterator
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Any
+from typing import TYPE_CHECKING, Any
 
-__all__ = ["add_serve_command", "bind_socket", "cmd_serve"]
+if TYPE_CHECKING:
+    from app.settings import Settings
+
+__all__ = ["add_serve_command", "bind_socket", "cmd_serve", "serve_in_thread"]
+
+#: uvicorn options shared by ``tactile serve`` and :func:`serve_in_thread`.
+UVICORN_OPTIONS: dict[str, Any] = {
+    "log_config": None,  # our structlog setup renders uvicorn's lines too
+    "access_log": False,  # one access line per request comes from our middleware
+    "lifespan": "on",
+    "timeout_graceful_shutdown": 10,
+    "proxy_headers": False,
+}
 
 
 def bind_socket(host: str, port: int, backlog: int = 2048) -> socket.socket:
@@ -70,13 +86,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     _metrics_dir(args.workers)
     sock = bind_socket(args.host, args.port)
     host, port = sock.getsockname()[:2]
-    common: dict[str, Any] = {
-        "log_config": None,  # our structlog setup renders uvicorn's lines too
-        "access_log": False,  # one access line per request comes from our middleware
-        "lifespan": "on",
-        "timeout_graceful_shutdown": 10,
-        "proxy_headers": False,
-    }
+    common = dict(UVICORN_OPTIONS)
     structlog.get_logger("app.serve").info(
         "listening",
         host=host,
@@ -98,6 +108,51 @@ def cmd_serve(args: argparse.Namespace) -> int:
         config = uvicorn.Config(create_app(settings), **common)
         uvicorn.Server(config).run(sockets=[sock])
     return 0
+
+
+@contextmanager
+def serve_in_thread(
+    settings: Settings, host: str = "127.0.0.1", port: int = 0, timeout: float = 30.0
+) -> Iterator[str]:
+    """A one-worker ``tactile serve`` (same socket, same uvicorn options) in a thread of
+    this process; yields its base URL once it accepts requests, and shuts it down
+    (lifespan end, database closed) when the block ends.
+
+    >>> from app.settings import Settings
+    >>> with serve_in_thread(Settings(db_path="/tmp/doc.db")) as url:  # doctest: +SKIP
+    ...     print(url)
+    http://127.0.0.1:40123
+    """
+    import uvicorn
+
+    from app.main import create_app
+
+    sock = bind_socket(host, port)
+    bound_host, bound_port = sock.getsockname()[:2]
+    server = uvicorn.Server(uvicorn.Config(create_app(settings), **UVICORN_OPTIONS))
+    failed: list[BaseException] = []
+
+    def run() -> None:
+        try:
+            server.run(sockets=[sock])
+        except BaseException as exc:  # reported to the caller below
+            failed.append(exc)
+
+    thread = threading.Thread(target=run, name="tactile-serve", daemon=True)
+    thread.start()
+    try:
+        deadline = time.monotonic() + timeout
+        while not server.started:
+            if not thread.is_alive() or time.monotonic() > deadline:
+                reason = f": {failed[0]!r}" if failed else ""
+                raise RuntimeError(f"the service did not start{reason}")
+            time.sleep(0.01)
+        url_host = f"[{bound_host}]" if ":" in bound_host else bound_host
+        yield f"http://{url_host}:{bound_port}"
+    finally:
+        server.should_exit = True
+        thread.join(timeout)
+        sock.close()
 
 
 def add_serve_command(subparsers: Any) -> None:

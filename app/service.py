@@ -6,8 +6,11 @@ draws); this module only moves data between the store, the planner and JSON,
 and decides where work runs:
 
 - CPU work (fits, plans, pictures) runs in worker threads behind one
-  :class:`anyio.CapacityLimiter` (``cpu_workers``); SQLite calls run in threads
-  behind another (``db_pool_size``); the event loop never blocks.
+  :class:`anyio.CapacityLimiter` (``cpu_workers``); encoding an answer behind a
+  second one of the same size, so that a read does not wait behind plans; SQLite
+  calls run in threads behind a third (``db_pool_size``); the event loop never
+  blocks. A request makes as few trips to the CPU workers as it can (under load
+  each trip waits for a free worker).
 - One lock per session id: two requests on one session never compute on stale
   state; across worker processes the store's version compare-and-swap does the
   same (a lost race is recomputed, or answered 412 when the client sent If-Match).
@@ -31,13 +34,16 @@ from pydantic import BaseModel
 from app.cache import LRU, KeyedLocks
 from app.convert import (
     build_session,
+    catch_up,
     derive,
     etag,
+    extends,
     if_match_ok,
     observation_from_dict,
     observation_to_dict,
     plan_out,
-    session_out,
+    plan_rng,
+    session_json,
     strategy_config,
 )
 from app.errors import (
@@ -93,7 +99,7 @@ def _next_state(
 ) -> tuple[Session, bytes]:
     """The session after `step`, derived, and its JSON at the next version (in a thread)."""
     new = derive(step(record, current))
-    return new, _json(session_out(record.id, record.version + 1, record.config, new, limit))
+    return new, session_json(record.id, record.version + 1, record.config, new, limit)
 
 
 class SessionService:
@@ -104,9 +110,10 @@ class SessionService:
         self.store = store
         self.cpu = anyio.CapacityLimiter(settings.cpu_workers)
         self.db = anyio.CapacityLimiter(settings.db_pool_size)
+        self.light = anyio.CapacityLimiter(settings.cpu_workers)
         self.locks = KeyedLocks()
         self.sessions: LRU[tuple[str, int], Session] = LRU(settings.session_cache_size)
-        self.plans: LRU[tuple[str, int], Plan] = LRU(settings.plan_cache_size)
+        self.plans: LRU[tuple[Any, ...], Plan] = LRU(settings.plan_cache_size)
         self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
         self._in_flight: set[tuple[str, str]] = set()
         self._render_lock = threading.Lock()  # matplotlib: one figure drawn at a time
@@ -114,6 +121,10 @@ class SessionService:
     # -- running work off the event loop ----------------------------------------------------
     async def run_cpu(self, fn: Callable[..., _T], *args: Any) -> _T:
         return await anyio.to_thread.run_sync(fn, *args, limiter=self.cpu)
+
+    async def run_light(self, fn: Callable[..., _T], *args: Any) -> _T:
+        """Short CPU work (encoding an answer) that should not queue behind plans."""
+        return await anyio.to_thread.run_sync(fn, *args, limiter=self.light)
 
     async def run_db(self, fn: Callable[..., _T], *args: Any) -> _T:
         return await anyio.to_thread.run_sync(fn, *args, limiter=self.db)
@@ -152,13 +163,24 @@ class SessionService:
         return record
 
     async def _session(self, record: SessionRecord) -> Session:
-        """The derived session of a record (cached per version; caller holds the lock)."""
+        """The derived session of a record (cached per version; caller holds the lock).
+
+        On a miss (another worker process wrote the newer versions, or this one
+        restarted) the newest cached version of the session whose observations
+        begin the record's is extended by the missing ones instead of re-deriving
+        the whole tree from the first observation."""
         key = (record.id, record.version)
         session = self.sessions.get(key)
         if session is None:
-            session = await self.run_cpu(lambda: derive(build_session(record)))
+            base = self._newest_prefix(record)
+            session = await self.run_cpu(lambda: derive(catch_up(base, record)))
             self.sessions.put(key, session)
         return session
+
+    def _newest_prefix(self, record: SessionRecord) -> Session | None:
+        mine = [s for (sid, _), s in self.sessions.items() if sid == record.id]
+        usable = [s for s in mine if extends(s, record)]
+        return max(usable, key=lambda s: len(s.observations), default=None)
 
     def _forget(self, session_id: str) -> None:
         self.sessions.drop(lambda k: k[0] == session_id)
@@ -186,34 +208,35 @@ class SessionService:
         return created, model.name
 
     # -- sessions ---------------------------------------------------------------------------
-    async def _models(self, refs: Sequence[str | dict[str, Any]]) -> list[ObjectModel]:
+    async def _stored_objects(self, refs: Sequence[str | dict[str, Any]]) -> dict[str, Any]:
         names = [r for r in refs if isinstance(r, str)]
-        stored = await self.run_db(self.store.get_objects, names) if names else {}
+        return await self.run_db(self.store.get_objects, names) if names else {}
 
-        def build() -> list[ObjectModel]:
-            models = []
-            for i, ref in enumerate(refs):
-                if isinstance(ref, str):
-                    if ref not in stored:
-                        raise InvalidInputError(
-                            f"no registered object named {ref!r}; register it with "
-                            "POST /v1/objects or give it inline",
-                            field=f"objects[{i}]",
-                        )
-                    models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
-                else:
-                    models.append(object_from_dict(ref, field=f"objects[{i}]"))
-            seen: dict[str, int] = {}
-            for i, m in enumerate(models):
-                if m.name in seen:
+    @staticmethod
+    def _build_models(
+        refs: Sequence[str | dict[str, Any]], stored: dict[str, Any]
+    ) -> list[ObjectModel]:
+        models = []
+        for i, ref in enumerate(refs):
+            if isinstance(ref, str):
+                if ref not in stored:
                     raise InvalidInputError(
-                        f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                        f"no registered object named {ref!r}; register it with "
+                        "POST /v1/objects or give it inline",
                         field=f"objects[{i}]",
                     )
-                seen[m.name] = i
-            return models
-
-        return await self.run_cpu(build)
+                models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
+            else:
+                models.append(object_from_dict(ref, field=f"objects[{i}]"))
+        seen: dict[str, int] = {}
+        for i, m in enumerate(models):
+            if m.name in seen:
+                raise InvalidInputError(
+                    f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                    field=f"objects[{i}]",
+                )
+            seen[m.name] = i
+        return models
 
     async def create_session(
         self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None
@@ -222,31 +245,37 @@ class SessionService:
         with self._claim(scope, idem_key):
             if idem_key and (old := await self.run_db(self.store.get_idempotent, scope, idem_key)):
                 return self._replay(old, fp)
-            models = await self._models(body["objects"])
-            ws = body["workspace"]
-            workspace = Workspace(tuple(ws["center"]), ws["radius"])
-            sensor = SensorBounds(**body["sensor"])
-            position = body.get("sensor_position") or [
-                workspace.center[0] + workspace.radius,
-                workspace.center[1],
-            ]
-            cfg = {
-                "objects": [object_to_dict(m) for m in models],
-                "sensor": {
-                    "position_error": sensor.position_error,
-                    "normal_error": sensor.normal_error,
-                },
-                "workspace": {"center": list(workspace.center), "radius": workspace.radius},
-                "sensor_position": [float(v) for v in position],
-                "strategy": dict(body["strategy"]),
-                "max_outliers": body["max_outliers"],
-            }
-            strategy_config(cfg)  # the planner's own checks
-            record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
-            session = await self.run_cpu(lambda: derive(build_session(record)))
-            body = await self.run_cpu(lambda: _json(session_out(record.id, 1, cfg, session, limit)))
+            stored = await self._stored_objects(body["objects"])
+
+            def prepare() -> tuple[SessionRecord, Session, bytes]:
+                # one trip to the CPU workers: under load each trip waits behind plans
+                models = self._build_models(body["objects"], stored)
+                ws = body["workspace"]
+                workspace = Workspace(tuple(ws["center"]), ws["radius"])
+                sensor = SensorBounds(**body["sensor"])
+                position = body.get("sensor_position") or [
+                    workspace.center[0] + workspace.radius,
+                    workspace.center[1],
+                ]
+                cfg = {
+                    "objects": [object_to_dict(m) for m in models],
+                    "sensor": {
+                        "position_error": sensor.position_error,
+                        "normal_error": sensor.normal_error,
+                    },
+                    "workspace": {"center": list(workspace.center), "radius": workspace.radius},
+                    "sensor_position": [float(v) for v in position],
+                    "strategy": dict(body["strategy"]),
+                    "max_outliers": body["max_outliers"],
+                }
+                strategy_config(cfg)  # the planner's own checks
+                record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
+                session = derive(build_session(record))
+                return record, session, session_json(record.id, 1, cfg, session, limit)
+
+            record, session, answer_body = await self.run_cpu(prepare)
             headers = {"ETag": etag(1), "Location": f"/v1/sessions/{record.id}"}
-            answer = Answer(201, body, headers)
+            answer = Answer(201, answer_body, headers)
             idem = self._idem(scope, idem_key, fp, answer)
             if (old := await self.run_db(self.store.create_session, record, idem)) is not None:
                 return self._replay(old, fp)
@@ -265,8 +294,8 @@ class SessionService:
         async with self.locks.hold(session_id):
             record = await self._record(session_id)
             session = await self._session(record)
-        body = await self.run_cpu(
-            lambda: _json(session_out(session_id, record.version, record.config, session, limit))
+        body = await self.run_light(
+            session_json, session_id, record.version, record.config, session, limit
         )
         return Answer(200, body, {"ETag": etag(record.version)})
 
@@ -391,33 +420,43 @@ class SessionService:
                 self._forget(session_id)
 
     # -- plans and pictures -----------------------------------------------------------------
-    async def _plan(self, record: SessionRecord, session: Session) -> Plan:
-        key = (record.id, record.version)
+    async def _plan(
+        self,
+        record: SessionRecord,
+        session: Session,
+        position: tuple[float, float] | None = None,
+    ) -> Plan:
+        """The plan for the record's version from `position` (None: the session's
+        sensor_position), cached per (id, version, position)."""
+        key = (record.id, record.version, position)
         cached = self.plans.get(key)
         if cached is not None:
             return cached
         cfg = record.config
-        seed = uuid.UUID(record.id).int % (2**63) ^ record.version
+        rng = plan_rng(record.id, record.version, cfg["strategy"].get("seed"))
+        sensor_position = cfg["sensor_position"] if position is None else list(position)
         result = await self.run_cpu(
             lambda: plan(
                 session.hypotheses,
                 session.models,
                 session.sensor,
                 session.workspace,
-                cfg["sensor_position"],
+                sensor_position,
                 strategy_config(cfg),
-                seed,
+                rng,
                 observations=session.observations,
             )
         )
         self.plans.put(key, result)
         return result
 
-    async def get_plan(self, session_id: str, limit: int) -> Answer:
+    async def get_plan(
+        self, session_id: str, limit: int, position: tuple[float, float] | None = None
+    ) -> Answer:
         async with self.locks.hold(session_id):
             record = await self._record(session_id)
             session = await self._session(record)
-            result = await self._plan(record, session)
+            result = await self._plan(record, session, position)
         out = plan_out(result, record.version, limit)
         return Answer(200, _json(out), {"ETag": etag(record.version)})
 

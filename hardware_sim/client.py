@@ -4,8 +4,9 @@ The loop (:func:`run_recognition`) talks to two boundaries only:
 
 - a :class:`RecognitionService`, the planner side: "what next?" and "here is
   what the probe found". :class:`InProcessService` calls the planner library
-  directly (``planner.session.Session`` + ``planner.strategies.plan``); an HTTP
-  implementation on the generated client fits the same three methods;
+  directly (``planner.session.Session`` + ``planner.strategies.plan``);
+  :class:`hardware_sim.http_service.HttpService` asks a running service through
+  the generated client (``hardware_sim.api_client``);
 - a :class:`hardware_sim.protocol.Probe`, the hardware side.
 
 World frame, lengths in the object files' unit, angles in radians.
@@ -25,7 +26,7 @@ World frame, lengths in the object files' unit, angles in radians.
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Protocol
 
@@ -57,7 +58,9 @@ class Advice:
     """The planner's answer to "what next?": session `status`, the best `path`
     (None when there is nothing to do or nothing informative), its predicted
     `p_distinguishing` (None for the opening probe, before any hypothesis),
-    planning time `plan_ms`, `truncated` (the time budget stopped the search)."""
+    planning time `plan_ms`, `truncated` (the time budget stopped the search),
+    the planner's `note`, and `expected_remaining`, the expected touches still
+    needed when taking the path, itself included (None when unknown)."""
 
     status: str
     path: SensingPath | None
@@ -65,6 +68,7 @@ class Advice:
     plan_ms: float
     truncated: bool = False
     note: str | None = None
+    expected_remaining: float | None = None
 
 
 @dataclass(frozen=True)
@@ -80,8 +84,9 @@ class Update:
 @dataclass(frozen=True)
 class Estimate:
     """One hypothesis as a client sees it: object, stable pose index, pose
-    (model -> world), pose error disk diameter `eps_t` (length), probability
-    and equivalence class."""
+    (model -> world), pose error disk diameter `eps_t` (length), probability,
+    equivalence class, and the bound |dt| on the translation (length; None when
+    not known)."""
 
     object: str
     stable_pose: int
@@ -89,10 +94,11 @@ class Estimate:
     eps_t: float
     probability: float
     equivalence_class: int
+    translation: float | None = None
 
 
 class RecognitionService(Protocol):
-    """The planner side of the loop (in process now, over HTTP later)."""
+    """The planner side of the loop (in process, or over HTTP)."""
 
     def advise(self, sensor_position: Sequence[float]) -> Advice:
         """Plan the next sensing path from the sensor's place on the safe circle."""
@@ -111,7 +117,11 @@ class InProcessService:
     """:class:`RecognitionService` calling the planner library in this process.
 
     Holds the (immutable) session and swaps it for the next on each observation.
-    `rng` drives the planner's random choices (the ``random`` strategy).
+    `rng` drives the planner's random choices (candidate subsampling, ties, the
+    ``random`` strategy) across the whole recognition. With `seed` instead, each
+    plan draws from ``default_rng([seed, version])``, version = 1 + observations so
+    far: the stream the HTTP service uses for a session whose strategy has that
+    `seed`, so both give the same plans.
     """
 
     def __init__(
@@ -122,13 +132,20 @@ class InProcessService:
         strategy: StrategyConfig | None = None,
         recognition: RecognitionConfig | None = None,
         rng: np.random.Generator | None = None,
+        seed: int | None = None,
     ) -> None:
+        if rng is not None and seed is not None:
+            raise ValueError("give rng or seed, not both")
         self.session = Session(models, bounds, workspace, recognition)
         self.strategy = strategy or StrategyConfig()
+        self.seed = seed
         self.rng = rng if rng is not None else np.random.default_rng(0)
 
     def advise(self, sensor_position: Sequence[float]) -> Advice:
         s = self.session
+        rng = self.rng
+        if self.seed is not None:
+            rng = np.random.default_rng([self.seed, 1 + len(s.observations)])
         result = plan(
             s.hypotheses,
             s.models,
@@ -136,7 +153,7 @@ class InProcessService:
             s.workspace,
             sensor_position,
             self.strategy,
-            self.rng,
+            rng,
             observations=s.observations,
         )
         best = result.best
@@ -147,6 +164,7 @@ class InProcessService:
             plan_ms=result.elapsed_ms,
             truncated=result.truncated,
             note=result.note,
+            expected_remaining=None if best is None else best.expected_remaining,
         )
 
     def observe(self, observation: Observation) -> Update:
@@ -164,6 +182,7 @@ class InProcessService:
                 h.error_bound.eps_t,
                 h.probability,
                 h.equivalence_class,
+                h.error_bound.translation,
             )
             for h in hyps
         ]
@@ -211,9 +230,15 @@ class Recognition:
         return float(sum(s.time for s in self.steps))
 
 
-def run_recognition(service: RecognitionService, probe: Probe, max_touches: int) -> Recognition:
+def run_recognition(
+    service: RecognitionService,
+    probe: Probe,
+    max_touches: int,
+    on_step: Callable[[Step], None] | None = None,
+) -> Recognition:
     """Plan, move, touch, observe until `localized`, `inconsistent`, no path, or
-    `max_touches` probes. Never prints; the caller reports the steps."""
+    `max_touches` probes. Never prints; the caller reports the steps (`on_step` is
+    called with each one as soon as it is done)."""
     if max_touches < 1:
         raise ValueError("max_touches must be >= 1")
     steps: list[Step] = []
@@ -229,6 +254,8 @@ def run_recognition(service: RecognitionService, probe: Probe, max_touches: int)
         result = probe.execute(advice.path)
         update = service.observe(result.observation)
         steps.append(Step(advice, result.observation, update, result.distance, result.time))
+        if on_step is not None:
+            on_step(steps[-1])
         status = update.status
         if status in DONE:
             break

@@ -4,6 +4,11 @@
 service on a free loopback port with a fresh database, runs locust headless for a
 bounded time, prints requests/s and p50/p95/p99 per endpoint, and exits non-zero on
 any failed request. Traffic goes to 127.0.0.1 only.
+
+``--mode recognize`` (default): robots plan, touch and observe (the closed loop);
+``--mode observe``: robots post observations only, no plan (what the observation
+endpoint sustains by itself). ``--hypotheses N`` asks for at most N hypotheses
+in each observation's answer (default: all, the API's default).
 """
 
 from __future__ import annotations
@@ -41,7 +46,18 @@ def _wait_ready(url: str, timeout: float = 60.0) -> None:
     raise RuntimeError(f"the service at {url} did not become ready")
 
 
-def run(workers: int, users: int, seconds: int, out: Path) -> dict:
+MODES = {"recognize": "Robot", "observe": "Prober"}
+
+
+def run(
+    workers: int,
+    users: int,
+    seconds: int,
+    out: Path,
+    mode: str = "recognize",
+    hypotheses: int | None = None,
+    keepalive: bool = True,
+) -> dict:
     """One load run; returns per-endpoint statistics and the failure count."""
     bin_dir = Path(sys.executable).parent
     port = _free_port()
@@ -66,12 +82,17 @@ def run(workers: int, users: int, seconds: int, out: Path) -> dict:
         )
         try:
             _wait_ready(url)
-            prefix = out / f"workers{workers}"
+            prefix = out / f"{mode}-workers{workers}"
+            env = {
+                **os.environ,
+                "LOADTEST_HYPOTHESES": "" if hypotheses is None else str(hypotheses),
+            }
             subprocess.run(
                 [
                     str(bin_dir / "locust"),
                     "-f",
                     str(Path(__file__).with_name("locustfile.py")),
+                    MODES[mode],
                     "--headless",
                     "--users",
                     str(users),
@@ -92,6 +113,7 @@ def run(workers: int, users: int, seconds: int, out: Path) -> dict:
                 check=False,
                 stdout=subprocess.DEVNULL,
                 stderr=subprocess.DEVNULL,
+                env=env,
             )
         finally:
             server.terminate()
@@ -111,6 +133,8 @@ def run(workers: int, users: int, seconds: int, out: Path) -> dict:
     }
     failures = sum(e["failures"] for e in endpoints.values())
     return {
+        "mode": mode,
+        "keepalive": keepalive,
         "workers": workers,
         "users": users,
         "seconds": seconds,
@@ -125,15 +149,28 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--users", type=int, default=8)
     parser.add_argument("--seconds", type=int, default=30)
     parser.add_argument("--out", default="out/loadtest")
+    parser.add_argument("--mode", choices=sorted(MODES), default="recognize")
+    parser.add_argument("--hypotheses", type=int, default=None, help="?limit= on observations")
+    parser.add_argument(
+        "--no-keepalive",
+        action="store_true",
+        help="a new connection per request (requests of a session spread over the workers)",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
-    results = [run(w, args.users, args.seconds, out) for w in args.workers]
+    results = [
+        run(w, args.users, args.seconds, out, args.mode, args.hypotheses, not args.no_keepalive)
+        for w in args.workers
+    ]
     if args.json:
         print(json.dumps(results, indent=1))
     for res in results:
-        print(f"\n{res['workers']} worker(s), {res['users']} robots, {res['seconds']} s:")
+        print(
+            f"\n{res['workers']} worker(s), {res['users']} robots ({res['mode']}"
+            f"{'' if res['keepalive'] else ', no keep-alive'}), {res['seconds']} s:"
+        )
         print(
             f"  {'endpoint':40s} {'requests':>8s} {'req/s':>7s} {'p50':>6s} {'p95':>6s} {'p99':>6s}"
         )

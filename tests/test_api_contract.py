@@ -343,6 +343,41 @@ def test_plan_ranks_paths_with_every_field(client):
     assert len(client.get(f"/v1/sessions/{s['id']}/plan?limit=1").json()["paths"]) == 1
 
 
+def test_plan_from_the_sensor_position_given(client):
+    s = create_session(client, sensor_position=[10, 0])
+    url = f"/v1/sessions/{s['id']}/plan"
+    probe = client.get(url, params={"sensor_x": 0, "sensor_y": -10}).json()["paths"][0]
+    assert probe["origin"] == pytest.approx([0.0, -10.0])
+    assert probe["direction"] == pytest.approx([0.0, 1.0], abs=1e-9)
+    default = client.get(url).json()["paths"][0]  # the session's place, not the last asked
+    assert default["origin"] == pytest.approx([10.0, 0.0])
+    for params, field in [({"sensor_x": 1}, "sensor_y"), ({"sensor_y": 1}, "sensor_x")]:
+        r = client.get(url, params=params)
+        assert is_problem(r, 422) and r.json()["errors"][0]["field"] == field
+    r = client.get(url, params={"sensor_x": "nan", "sensor_y": 0})
+    assert is_problem(r, 422) and r.json()["errors"][0]["field"] == "sensor_x"
+
+
+@pytest.mark.parametrize("seed", [0, 12345, 2**63 - 1])
+def test_sessions_with_one_seed_make_the_same_plans(client, seed):
+    def plans() -> list:
+        s = create_session(client, strategy={**FAST_STRATEGY, "seed": seed})
+        assert s["strategy"]["seed"] == seed
+        client.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM)
+        return client.get(f"/v1/sessions/{s['id']}/plan?limit=5").json()["paths"]
+
+    assert plans() == plans()
+
+
+def test_a_bad_seed_names_the_field(client):
+    for seed in (-1, 2**63, 1.5, "x"):
+        r = client.post(
+            "/v1/sessions",
+            json={"objects": [SQUARE], "workspace": WORKSPACE, "strategy": {"seed": seed}},
+        )
+        assert is_problem(r, 422) and r.json()["errors"][0]["field"] == "strategy.seed"
+
+
 def test_plan_when_localized_is_empty(client):
     s = create_session(client, objects=[SQUARE])
     for obs in (BOTTOM, RIGHT):

@@ -5,6 +5,7 @@ from typing import Annotated
 from fastapi import APIRouter, Query
 
 from app.deps import ServiceDep, SessionId, auth_dependencies
+from app.errors import InvalidInputError
 from app.routes import PROBLEMS, respond
 from app.schemas import InputModels, PlanOut
 from app.settings import Settings
@@ -19,15 +20,34 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         dependencies=auth_dependencies(settings),
         responses=PROBLEMS,
     )
+    big = settings.max_coordinate
+    Coordinate = Annotated[
+        float | None,
+        Query(
+            ge=-big,
+            le=big,
+            allow_inf_nan=False,
+            description="the sensor's current place (world frame; give both x and y); "
+            "default: the session's sensor_position",
+        ),
+    ]
 
     @router.get("/plan", response_model=PlanOut)
     async def get_plan(
         session_id: SessionId,
         service: ServiceDep,
         limit: Annotated[int, Query(ge=1, le=settings.max_plan_paths)] = 5,
+        sensor_x: Coordinate = None,
+        sensor_y: Coordinate = None,
     ):
         """Ranked sensing paths, best first, within the session's `budget_ms`
-        (`truncated` says the search stopped early). With no contact yet: the opening probe."""
-        return respond(await service.get_plan(str(session_id), limit))
+        (`truncated` says the search stopped early). With no contact yet: the opening probe.
+        `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
+        opening probe start there)."""
+        if (sensor_x is None) != (sensor_y is None):
+            missing = "sensor_y" if sensor_y is None else "sensor_x"
+            raise InvalidInputError("give both sensor_x and sensor_y, or neither", field=missing)
+        position = None if sensor_x is None else (sensor_x, sensor_y)
+        return respond(await service.get_plan(str(session_id), limit, position))
 
     return router

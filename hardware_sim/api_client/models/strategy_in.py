@@ -10,6 +10,7 @@ from ..types import UNSET, Unset
 
 from ..models.strategy_in_name import StrategyInName
 from ..types import UNSET, Unset
+from typing import cast
 
 
 
@@ -30,6 +31,8 @@ class StrategyIn:
             max_paths (int | Unset):  Default: 5.
             motion_weight (float | Unset):  Default: 0.0.
             name (StrategyInName | Unset):  Default: StrategyInName.LOOKAHEAD.
+            seed (int | None | Unset): seeds the planner's random choices: the plan at session version v draws from numpy's
+                default_rng([seed, v]); null: a seed drawn from the session id
      """
 
     budget_ms: float | Unset = 500.0
@@ -38,6 +41,7 @@ class StrategyIn:
     max_paths: int | Unset = 5
     motion_weight: float | Unset = 0.0
     name: StrategyInName | Unset = StrategyInName.LOOKAHEAD
+    seed: int | None | Unset = UNSET
 
 
 
@@ -59,6 +63,12 @@ class StrategyIn:
             name = self.name.value
 
 
+        seed: int | None | Unset
+        if isinstance(self.seed, Unset):
+            seed = UNSET
+        else:
+            seed = self.seed
+
 
         field_dict: dict[str, Any] = {}
 
@@ -76,6 +86,8 @@ class StrategyIn:
             field_dict["motion_weight"] = motion_weight
         if name is not UNSET:
             field_dict["name"] = name
+        if seed is not UNSET:
+            field_dict["seed"] = seed
 
         return field_dict
 
@@ -104,6 +116,16 @@ class StrategyIn:
 
 
 
+        def _parse_seed(data: object) -> int | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(int | None | Unset, data)
+
+        seed = _parse_seed(d.pop("seed", UNSET))
+
+
         strategy_in = cls(
             budget_ms=budget_ms,
             depth=depth,
@@ -111,6 +133,7 @@ class StrategyIn:
             max_paths=max_paths,
             motion_weight=motion_weight,
             name=name,
+            seed=seed,
         )
 
         return strategy_in

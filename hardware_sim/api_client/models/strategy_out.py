@@ -8,6 +8,8 @@ from attrs import field as _attrs_field
 
 from ..types import UNSET, Unset
 
+from ..types import UNSET, Unset
+from typing import cast
 
 
 
@@ -28,6 +30,7 @@ class StrategyOut:
             max_paths (int):
             motion_weight (float):
             name (str):
+            seed (int | None | Unset):
      """
 
     budget_ms: float
@@ -36,6 +39,7 @@ class StrategyOut:
     max_paths: int
     motion_weight: float
     name: str
+    seed: int | None | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -55,6 +59,12 @@ class StrategyOut:
 
         name = self.name
 
+        seed: int | None | Unset
+        if isinstance(self.seed, Unset):
+            seed = UNSET
+        else:
+            seed = self.seed
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -66,6 +76,8 @@ class StrategyOut:
             "motion_weight": motion_weight,
             "name": name,
         })
+        if seed is not UNSET:
+            field_dict["seed"] = seed
 
         return field_dict
 
@@ -86,6 +98,16 @@ class StrategyOut:
 
         name = d.pop("name")
 
+        def _parse_seed(data: object) -> int | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(int | None | Unset, data)
+
+        seed = _parse_seed(d.pop("seed", UNSET))
+
+
         strategy_out = cls(
             budget_ms=budget_ms,
             depth=depth,
@@ -93,6 +115,7 @@ class StrategyOut:
             max_paths=max_paths,
             motion_weight=motion_weight,
             name=name,
+            seed=seed,
         )
 
 

@@ -20,6 +20,8 @@ def _get_kwargs(
     session_id: UUID,
     *,
     limit: int | Unset = 5,
+    sensor_x: float | None | Unset = UNSET,
+    sensor_y: float | None | Unset = UNSET,
 
 ) -> dict[str, Any]:
     
@@ -29,6 +31,20 @@ def _get_kwargs(
     params: dict[str, Any] = {}
 
     params["limit"] = limit
+
+    json_sensor_x: float | None | Unset
+    if isinstance(sensor_x, Unset):
+        json_sensor_x = UNSET
+    else:
+        json_sensor_x = sensor_x
+    params["sensor_x"] = json_sensor_x
+
+    json_sensor_y: float | None | Unset
+    if isinstance(sensor_y, Unset):
+        json_sensor_y = UNSET
+    else:
+        json_sensor_y = sensor_y
+    params["sensor_y"] = json_sensor_y
 
 
     params = {k: v for k, v in params.items() if v is not UNSET and v is not None}
@@ -122,16 +138,24 @@ def sync_detailed(
     *,
     client: AuthenticatedClient | Client,
     limit: int | Unset = 5,
+    sensor_x: float | None | Unset = UNSET,
+    sensor_y: float | None | Unset = UNSET,
 
 ) -> Response[PlanOut | Problem]:
     """ Get Plan
 
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
+    `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
+    opening probe start there).
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
+        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
+        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -145,6 +169,8 @@ def sync_detailed(
     kwargs = _get_kwargs(
         session_id=session_id,
 limit=limit,
+sensor_x=sensor_x,
+sensor_y=sensor_y,
 
     )
 
@@ -159,16 +185,24 @@ def sync(
     *,
     client: AuthenticatedClient | Client,
     limit: int | Unset = 5,
+    sensor_x: float | None | Unset = UNSET,
+    sensor_y: float | None | Unset = UNSET,
 
 ) -> PlanOut | Problem | None:
     """ Get Plan
 
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
+    `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
+    opening probe start there).
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
+        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
+        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -183,6 +217,8 @@ def sync(
         session_id=session_id,
 client=client,
 limit=limit,
+sensor_x=sensor_x,
+sensor_y=sensor_y,
 
     ).parsed
 
@@ -191,16 +227,24 @@ async def asyncio_detailed(
     *,
     client: AuthenticatedClient | Client,
     limit: int | Unset = 5,
+    sensor_x: float | None | Unset = UNSET,
+    sensor_y: float | None | Unset = UNSET,
 
 ) -> Response[PlanOut | Problem]:
     """ Get Plan
 
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
+    `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
+    opening probe start there).
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
+        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
+        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -214,6 +258,8 @@ async def asyncio_detailed(
     kwargs = _get_kwargs(
         session_id=session_id,
 limit=limit,
+sensor_x=sensor_x,
+sensor_y=sensor_y,
 
     )
 
@@ -228,16 +274,24 @@ async def asyncio(
     *,
     client: AuthenticatedClient | Client,
     limit: int | Unset = 5,
+    sensor_x: float | None | Unset = UNSET,
+    sensor_y: float | None | Unset = UNSET,
 
 ) -> PlanOut | Problem | None:
     """ Get Plan
 
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
+    `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
+    opening probe start there).
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
+        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
+        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
+            y); default: the session's sensor_position
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -252,5 +306,7 @@ async def asyncio(
         session_id=session_id,
 client=client,
 limit=limit,
+sensor_x=sensor_x,
+sensor_y=sensor_y,
 
     )).parsed
