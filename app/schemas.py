@@ -155,7 +155,10 @@ class PlannedPathOut(BaseModel):
     direction: Vec2Out
     length: float
     aim: Vec2Out
-    family: str = Field(description="distinguishing, informative, partial, uninformative, ...")
+    family: str = Field(
+        description="distinguishing, informative, partial, uninformative, or refining "
+        "(offered only when no path is informative: it shrinks the error disks)"
+    )
     p_distinguishing: float
     p_informative: float
     expected_pruning: float
@@ -164,6 +167,11 @@ class PlannedPathOut(BaseModel):
     )
     motion_cost: float | None
     source: str | None = None
+    expected_eps_t: float | None = Field(
+        default=None,
+        description="refining paths: the probability-weighted error-disk diameter "
+        "expected after the touch (length)",
+    )
 
 
 class PlanOut(BaseModel):

@@ -28,12 +28,15 @@ class PlannedPathOut:
             direction (list[float]):
             expected_pruning (float):
             expected_remaining (float | None): expected touches still needed when taking this path (itself included)
-            family (str): distinguishing, informative, partial, uninformative, ...
+            family (str): distinguishing, informative, partial, uninformative, or refining (offered only when no path is
+                informative: it shrinks the error disks)
             length (float):
             motion_cost (float | None):
             origin (list[float]):
             p_distinguishing (float):
             p_informative (float):
+            expected_eps_t (float | None | Unset): refining paths: the probability-weighted error-disk diameter expected
+                after the touch (length)
             source (None | str | Unset):
      """
 
@@ -47,6 +50,7 @@ class PlannedPathOut:
     origin: list[float]
     p_distinguishing: float
     p_informative: float
+    expected_eps_t: float | None | Unset = UNSET
     source: None | str | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
@@ -83,6 +87,12 @@ class PlannedPathOut:
 
         p_informative = self.p_informative
 
+        expected_eps_t: float | None | Unset
+        if isinstance(self.expected_eps_t, Unset):
+            expected_eps_t = UNSET
+        else:
+            expected_eps_t = self.expected_eps_t
+
         source: None | str | Unset
         if isinstance(self.source, Unset):
             source = UNSET
@@ -104,6 +114,8 @@ class PlannedPathOut:
             "p_distinguishing": p_distinguishing,
             "p_informative": p_informative,
         })
+        if expected_eps_t is not UNSET:
+            field_dict["expected_eps_t"] = expected_eps_t
         if source is not UNSET:
             field_dict["source"] = source
 
@@ -149,6 +161,16 @@ class PlannedPathOut:
 
         p_informative = d.pop("p_informative")
 
+        def _parse_expected_eps_t(data: object) -> float | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(float | None | Unset, data)
+
+        expected_eps_t = _parse_expected_eps_t(d.pop("expected_eps_t", UNSET))
+
+
         def _parse_source(data: object) -> None | str | Unset:
             if data is None:
                 return data
@@ -170,6 +192,7 @@ class PlannedPathOut:
             origin=origin,
             p_distinguishing=p_distinguishing,
             p_informative=p_informative,
+            expected_eps_t=expected_eps_t,
             source=source,
         )
 
