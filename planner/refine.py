@@ -23,13 +23,19 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.outcomes import Outcomes, PosedSet
-from planner.pose import consistent_set_bounds, fit_batch, noise_scales, point_bounds
+from planner.pose import (
+    consistent_set_bounds,
+    fit_batch,
+    noise_scales,
+    point_bounds,
+    worst_case_bounds,
+)
 from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds
 
 __all__ = ["Refinement", "refinement"]
 
-#: Rotations sampled by the consistent-set sweep when predicting (recognition uses 25).
-_SWEEP_SAMPLES = 9
+#: Rotations sampled by the consistent-set sweep when predicting (as the recognition does).
+_SWEEP_SAMPLES = 25
 #: Most (path, hypothesis) rows bounded in one call (the sweep's memory).
 _MAX_ROWS = 6000
 
@@ -40,11 +46,13 @@ class Refinement:
 
     `before` (K,) the disk diameter of each class' most probable member now;
     `after` (C, K) the same after path c (unchanged where the path misses it, meets
-    it at an uncertain place, or leaves its pose undetermined); `expected` (C,) the
-    class-weighted mean of `after`, and `current` that of `before`."""
+    it at an uncertain place, or leaves its pose undetermined), `rotation` (C, K)
+    the rotation bound after path c; `expected` (C,) the class-weighted mean of
+    `after`, and `current` that of `before`."""
 
     before: np.ndarray
     after: np.ndarray
+    rotation: np.ndarray
     expected: np.ndarray
     current: float
 
@@ -70,6 +78,7 @@ def refinement(
     reps = order[first]  # one per class, in class order
     before = posed.eps_t[reps]
     after = np.broadcast_to(before, (C, len(reps))).copy()
+    rotation = np.broadcast_to(posed.rotation[reps], (C, len(reps))).copy()
     sure = (
         (outcomes.face[:, reps] >= 0)
         & ~outcomes.vertex[:, reps]
@@ -141,7 +150,10 @@ def refinement(
                 samples=_SWEEP_SAMPLES,
             )
             eps_t = 2 * np.minimum(moved + second, swept.moved).max(axis=1)
+            d_theta = worst_case_bounds(fit.sens[det], assigned[det], eps_d, phi)[1]
+            d_theta = np.minimum(d_theta * (1 + phi) + phi**2, swept.dtheta)
             rows = (c_idx[det], k_idx[det])
             after[rows] = np.minimum(after[rows], eps_t)
+            rotation[rows] = np.minimum(rotation[rows], d_theta)
     weight = posed.class_weight
-    return Refinement(before, after, after @ weight, float(before @ weight))
+    return Refinement(before, after, rotation, after @ weight, float(before @ weight))

@@ -18,6 +18,7 @@ returns an uninformative path while an informative candidate exists.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -475,7 +476,7 @@ def plan(
     note = ranking.note
     if not paths:
         paths, note = _refining(
-            found, hypotheses, _models(models), contacts, sensor, ranking, config.max_paths
+            found, hypotheses, _models(models), contacts, sensor, ranking, config
         )
     if found.truncated:
         note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
@@ -496,20 +497,43 @@ def _refining(
     contacts: Sequence[Contact],
     sensor: SensorBounds,
     ranking: Ranking,
-    max_paths: int,
+    config: StrategyConfig,
 ) -> tuple[list[PlannedPath], str | None]:
     """No informative path: the paths that shrink the expected error disk most
-    (at least by `_REFINE_GAIN` of it), with a note saying so."""
+    (at least by `_REFINE_GAIN` of it), with a note saying so. Their scores are
+    those of the outcome model with the disks each class is predicted to have
+    once the touch is made (with today's disks every outcome is confusable)."""
     refine = refinement(hypotheses, models, found.posed, found.outcomes, contacts, sensor)
     gain = refine.current - refine.expected
     ok = np.flatnonzero(gain > _REFINE_GAIN * refine.current)
     if not len(ok):
         return [], ranking.note
-    order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))]
-    paths = [
-        _planned(found, int(i), ranking, family=REFINING, expected_eps_t=refine.expected[i])
-        for i in order[:max_paths]
-    ]
+    order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]
+    cls = found.posed.cls
+    paths = []
+    for i in order:
+        # the path's outcome model with the disks it leaves (each class' best member's)
+        posed = dataclasses.replace(
+            found.posed, eps_t=refine.after[i][cls], rotation=refine.rotation[i][cls]
+        )
+        one = found.candidates.subset([i])
+        outcome = predict_outcomes(
+            posed, one.origins, one.directions, one.lengths, sensor, config.outcome
+        )
+        bits = pin_families(
+            hypotheses, posed, outcome, class_bits(posed, outcome, sensor, config.outcome), sensor
+        )
+        info = information_scores(SurvivorTable.from_bits(bits, posed.class_weight))
+        paths.append(
+            _planned(
+                found,
+                int(i),
+                ranking,
+                family=REFINING,
+                expected_eps_t=refine.expected[i],
+                scores=(info, 0),
+            )
+        )
     note = (
         f"{ranking.note}: refining the pose instead "
         f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
@@ -523,17 +547,21 @@ def _planned(
     ranking: Ranking,
     family: str | None = None,
     expected_eps_t: float | None = None,
+    scores: tuple[InformationScores, int] | None = None,
 ) -> PlannedPath:
-    c, info = found.candidates, found.info
+    """Candidate `i` as a planned path; `scores` (information scores, row) replace
+    the analysis' own for that path."""
+    c = found.candidates
+    info, j = scores if scores is not None else (found.info, i)
     return PlannedPath(
         origin=(float(c.origins[i, 0]), float(c.origins[i, 1])),
         direction=(float(c.directions[i, 0]), float(c.directions[i, 1])),
         length=float(c.lengths[i]),
         aim=(float(c.aims[i, 0]), float(c.aims[i, 1])),
-        family=family or FAMILIES[int(info.family[i])],
-        p_distinguishing=float(info.p_distinguishing[i]),
-        p_informative=float(info.p_informative[i]),
-        expected_pruning=float(info.expected_pruning[i]),
+        family=family or FAMILIES[int(info.family[j])],
+        p_distinguishing=float(info.p_distinguishing[j]),
+        p_informative=float(info.p_informative[j]),
+        expected_pruning=float(info.expected_pruning[j]),
         expected_remaining=float(ranking.expected_remaining[i]),
         motion_cost=float(found.motion[i]),
         source=str(c.source[i]),
