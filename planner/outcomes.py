@@ -298,8 +298,8 @@ class _Items:
     """The outcome slots of some paths as items (c, SLOTS H), item k = slot k // H
     of hypothesis k % H: `valid`, `hit`, interval centre `d` (along the path) and
     half-width `r`, `off` (distance off the path), normal angle `u` from the
-    heading in [0, 2 pi) with half-width `a`; `slots` (C, H, SLOTS) and the
-    hypothesis `order` give every item's fields for the one-by-one tests."""
+    heading in [0, 2 pi) with half-width `a`; `slots` holds every item's slot
+    fields (c, SLOTS H) for the one-by-one tests."""
 
     part: slice
     order: np.ndarray
@@ -316,28 +316,30 @@ class _Items:
     def of(cls, o: Outcomes, slots: _Slots, part: slice, order: np.ndarray) -> _Items:
         n_paths = part.stop - part.start
         flat = lambda a: np.swapaxes(a[part][:, order], 1, 2).reshape(n_paths, -1)  # noqa: E731
-        hit = flat(o.slot_hit & o.slot_valid)
+        # the slot fields in item order, for the one-by-one tests
+        items = _Slots(*(flat(getattr(slots, f.name)) for f in fields(_Slots)))
+        hit = items.hit & items.valid
         # angles from the path's heading: hit normals face back along it
         u = np.mod(flat(o.slot_angle) - o.heading[part, None], 2 * math.pi)
         off = np.where(hit, np.abs(flat(o.slot_offset)), np.inf)
         return cls(
             part,
             order,
-            flat(o.slot_valid),
+            items.valid,
             hit,
             flat(o.slot_distance),
-            flat(slots.reach),
+            items.reach,
             off,
             u,
-            flat(slots.alpha),
-            slots,
+            items.alpha,
+            items,
         )
 
     def _slots_at(self, c: np.ndarray, k: np.ndarray) -> _Slots:
         """The slot fields of items (c, k) (broadcast)."""
-        n_hyp = len(self.order)
-        at = (c + self.part.start, self.order[k % n_hyp], k // n_hyp)
-        return _Slots(*(getattr(self.slots, f.name)[at] for f in fields(_Slots)))
+        c, k = np.broadcast_arrays(c, k)
+        at = c * self.hit.shape[1] + k
+        return _Slots(*(getattr(self.slots, f.name).take(at) for f in fields(_Slots)))
 
     def rows(self, posed: PosedSet, width: int, chunk_elements: int) -> np.ndarray:
         n_paths, n_items = self.hit.shape
@@ -354,8 +356,9 @@ class _Items:
         if self.hit.sum(axis=1).max(initial=0) <= _FEW_HITS:  # few: every pair one by one
             return rows | self._all_pairs(owner)
         # arcs clear of the cut at the heading overlap iff their intervals do
+        finite = self.hit & np.isfinite(self.d)
         clear = (self.u - self.a >= _ANGLE_BAND) & (self.u + self.a <= 2 * math.pi - _ANGLE_BAND)
-        clear &= self.hit & np.isfinite(self.d)
+        clear &= finite
         d_low, d_high, u_low, u_high = (
             self.d - self.r,
             self.d + self.r,
@@ -381,35 +384,59 @@ class _Items:
             c, k = np.nonzero(regular & (slot == i))
             for j in range(i + 1):
                 rows[c, owner[k]] |= self._overlaps(lists[j], c, k, 0.0, 0.0)
-        # near ties and near misses against the regular slots: sure matches from
-        # shrunk intervals, and the others of grown intervals confirmed one by one
-        near = clear & ~regular
-        c, k = np.nonzero(near)
+        # near ties, near misses and arcs across the heading against the regular slots
+        loose = finite & ~regular
+        c, k = np.nonzero(loose)
         if len(c):
-            r_min = float(self.r[self.hit].min(initial=0.0))
-            # off the path by x: |p - q|^2 = dd^2 + x^2 <= R^2 holds once |dd| <= R - x^2 / R
-            shrink = np.where(self.off[c, k] > 0, self.off[c, k] ** 2 / (self.r[c, k] + r_min), 0.0)
-            found = np.zeros((len(c), width), dtype=np.uint64)
-            for j in range(SLOTS):
-                sure = self._overlaps(lists[j], c, k, -shrink - 2 * band, -1e-12)
-                maybe = self._overlaps(lists[j], c, k, 2 * band, _ANGLE_BAND) & ~sure
-                found |= sure | self._confirm(c, k, maybe, j)
-            np.bitwise_or.at(rows, (c, owner[k]), found)
-        # arcs across the heading against every hit; near ones against each other
-        crossing = self.hit & ~clear
-        for queries, targets in ((crossing, self.hit), (near, near | crossing)):
+            np.bitwise_or.at(rows, (c, owner[k]), self._loose(lists, c, k, band))
+        # what the lists leave out, one by one: loose slots against each other, and
+        # any slot not on the path's line
+        stray = self.hit & ~finite
+        for queries, targets in ((stray, self.hit), (loose, loose | stray)):
             c, k = np.nonzero(queries)
             if len(c):
                 found = self._exact(c, k, targets, owner, chunk_elements)
                 np.bitwise_or.at(rows, (c, owner[k]), found)
         return rows
 
+    def _loose(self, lists: list, c: np.ndarray, k: np.ndarray, band: float) -> np.ndarray:
+        """(E, W) owners of the regular slots that match items (c, k): sure matches
+        from shrunk intervals and arcs, and the others of grown ones confirmed one by
+        one. An arc across the heading is also tested one turn up or down."""
+        r_min = float(self.r[self.hit].min(initial=0.0))
+        off, r = self.off[c, k], self.r[c, k]
+        # off the path by x: |p - q|^2 = dd^2 + x^2 <= R^2 holds once |dd| <= R - x^2 / R
+        shrink = np.where(off > 0, off**2 / (r + r_min), 0.0)
+        u_low = self.u[c, k] - self.a[c, k] - _ANGLE_BAND
+        u_high = self.u[c, k] + self.a[c, k] + _ANGLE_BAND
+        turns = [(np.arange(len(c)), 0.0)]
+        for need, shift in ((u_low < 0, 2 * math.pi), (u_high > 2 * math.pi, -2 * math.pi)):
+            if need.any():
+                turns.append((np.flatnonzero(need), shift))
+        found = np.zeros((len(c), lists[0][0].before.shape[-1]), dtype=np.uint64)
+        for j in range(SLOTS):
+            sure, maybe = np.zeros_like(found), np.zeros_like(found)
+            for e, turn in turns:
+                inside = -shrink[e] - 2 * band
+                sure[e] |= self._overlaps(lists[j], c[e], k[e], inside, -1e-12, turn)
+                maybe[e] |= self._overlaps(lists[j], c[e], k[e], 2 * band, _ANGLE_BAND, turn)
+            found |= sure | self._confirm(c, k, maybe & ~sure, j)
+        return found
+
     def _overlaps(
-        self, lists: list, c: np.ndarray, k: np.ndarray, grow_d: Any, grow_u: Any
+        self,
+        lists: list,
+        c: np.ndarray,
+        k: np.ndarray,
+        grow_d: Any,
+        grow_u: Any,
+        shift_u: float = 0.0,
     ) -> np.ndarray:
         """(E, W) owners of the list's slots whose interval and arc overlap those of
-        item (c, k), its half-widths grown by `grow_d` and `grow_u`."""
-        d, r, u, a = self.d[c, k], self.r[c, k] + grow_d, self.u[c, k], self.a[c, k] + grow_u
+        item (c, k), its half-widths grown by `grow_d` and `grow_u` and its arc
+        turned by `shift_u`."""
+        d, r, a = self.d[c, k], self.r[c, k] + grow_d, self.a[c, k] + grow_u
+        u = self.u[c, k] + shift_u
         return lists[0].overlapping(c, d - r, d + r) & lists[1].overlapping(c, u - a, u + a)
 
     def _confirm(self, c: np.ndarray, k: np.ndarray, maybe: np.ndarray, j: int) -> np.ndarray:
@@ -444,27 +471,20 @@ class _Items:
         """(E, W) hypotheses one of whose `targets` slots (c, items) matches item (c, k)."""
         n_hyp = len(owner) // SLOTS
         at = compact(targets)
-        member = at >= 0
-        path = np.arange(len(targets))[:, None]
-        theirs = self._slots_at(path, np.maximum(at, 0))
+        size = (at >= 0).sum(axis=1)[c]
         out = np.zeros((len(c), n_words(n_hyp)), dtype=np.uint64)
-        # queries of paths with few targets first, each batch as wide as its widest path
-        size = member.sum(axis=1)[c]
-        by_size = np.argsort(size, kind="stable")
-        # batches of about `chunk` pairs
-        ends = np.searchsorted(np.cumsum(size[by_size]), np.arange(chunk, size.sum() + 1, chunk))
+        # every (query, target) pair once, in batches of about `chunk` pairs
+        ends = np.searchsorted(np.cumsum(size), np.arange(chunk, size.sum() + 1, chunk))
         for lo, hi in zip(np.r_[0, ends], np.r_[ends, len(c)], strict=True):
             if hi <= lo:
                 continue
-            pick = by_size[lo:hi]
-            width = max(1, int(size[pick[-1]]))
-            cc, kk = c[pick], k[pick]
-            mine = self._slots_at(cc[:, None], kk[:, None])
-            rows = _Slots(*(getattr(theirs, f.name)[cc, :width] for f in fields(_Slots)))
-            e, t = np.nonzero(_match(mine, rows) & member[cc, :width])
-            hits = np.zeros((len(cc), n_hyp), dtype=bool)
-            hits[e, owner[at[cc[e], t]]] = True
-            out[pick] = pack_bits(hits)
+            e = np.repeat(np.arange(lo, hi), size[lo:hi])
+            first = np.cumsum(size[lo:hi]) - size[lo:hi]
+            t = at[c[e], np.arange(len(e)) - np.repeat(first, size[lo:hi])]
+            ok = _match(self._slots_at(c[e], k[e]), self._slots_at(c[e], t))
+            hits = np.zeros((hi - lo, n_hyp), dtype=bool)
+            hits[e[ok] - lo, owner[t[ok]]] = True
+            out[lo:hi] = pack_bits(hits)
         return out
 
 
