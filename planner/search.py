@@ -31,6 +31,7 @@ from __future__ import annotations
 import bisect
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
@@ -38,7 +39,7 @@ import numpy as np
 from planner.bitsets import pack_bits, popcount, unpack_bits
 from planner.outcomes import SurvivorTable
 
-__all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value"]
+__all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value", "undominated"]
 
 #: Children of one path evaluated together one touch deep, and the most words
 #: (paths x members x words) one batch of them may take.
@@ -111,6 +112,16 @@ class _Search:
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
         self.states = 0
+
+    @cached_property
+    def leaf(self) -> np.ndarray:
+        """The paths one touch deep values need: no other path dominates them."""
+        return undominated(self.bits)
+
+    @cached_property
+    def leaf_by_class(self) -> np.ndarray:
+        """(K, leaf paths, W): `by_class` on the `leaf` paths."""
+        return np.ascontiguousarray(self.by_class[:, self.leaf])
 
     def settled(self, state: np.ndarray, idx: np.ndarray) -> bool:
         """Can no path split the set `state` (W,) of the classes `idx`?"""
@@ -191,11 +202,12 @@ class _Search:
             return 0.0
         if depth == 0:
             return 1.0  # admissible leaf bound: S can be split, so at least one touch
-        node = self.expand(state, idx)
         if depth == 1:
-            best = float(node.bound.min())  # children are leaves worth 0 or 1: exact
+            # children are leaves worth 0 or 1: exact
+            best = float(self.expand(state, idx, self.leaf).bound.min())
         else:
             # E(S) = 1 + min_P sum_h w(h|S) E(S_P(h) & S), paths in order of their bound
+            node = self.expand(state, idx)
             best = np.inf
             child_depth = None if depth is None else depth - 1
             for c in np.argsort(node.bound, kind="stable"):
@@ -255,7 +267,7 @@ class _Search:
             # similar sizes together, each batch padded to its largest set and kept
             # within _BATCH_ELEMENTS words
             order = np.argsort(size, kind="stable")
-            budget = max(1, _BATCH_ELEMENTS // (self.bits.shape[0] * self.bits.shape[-1]))
+            budget = max(1, _BATCH_ELEMENTS // (len(self.leaf) * self.bits.shape[-1]))
             lo = 0
             while lo < len(order):
                 hi = lo + 1
@@ -297,8 +309,8 @@ class _Search:
         total = w.sum(axis=1, keepdims=True)
         # w(h|T), uniform when T weighs nothing
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
-        # |S_P(h) & T| for every member h and path P: (n, M, C)
-        count = popcount(self.by_class[g] & sets[:, None, None, :])
+        # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
+        count = popcount(self.leaf_by_class[g] & sets[:, None, None, :])
         stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
         settled = count <= 1
         if self.any_inseparable:
@@ -356,6 +368,33 @@ class _Search:
                 exact[c] = True
                 bisect.insort(best, v + extra[c])
         return SearchResult(value, exact, truncated, self.states)
+
+
+def undominated(bits: np.ndarray) -> np.ndarray:
+    """Indices of the paths (C, K, W) that no other path dominates, the first of
+    identical ones kept.
+
+    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h. Then in any
+    state T every member that Q' leaves settled Q does too, and every member Q
+    leaves with T, Q' does too; since (1 + o) / (1 - s) grows with s and with o + s,
+    Q's one-touch bound ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above
+    Q''s: the smallest bound over the undominated paths is the smallest over all.
+    (Deeper values need not follow: E is not monotone in the set.)
+
+    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
+    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
+    [1]
+    """
+    n = len(bits)
+    flat = np.asarray(bits, dtype=np.uint64).reshape(n, -1)
+    # within[q, r]: S_q(h) within S_r(h) for every h
+    within = np.empty((n, n), dtype=bool)
+    step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
+    for lo in range(0, n, step):
+        within[lo : lo + step] = ~np.any(flat[lo : lo + step, None] & ~flat[None], axis=-1)
+    first = np.arange(n)[:, None] < np.arange(n)[None, :]
+    beaten = (within & ~within.T) | (within & within.T & first)
+    return np.flatnonzero(~beaten.any(axis=0))
 
 
 def _neighbourhoods(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
