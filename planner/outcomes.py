@@ -25,7 +25,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any
 
 import numpy as np
 
@@ -371,24 +370,44 @@ class _Items:
         on_path = clear & (self.off == 0)
         regular = on_path & ~close_ends(d_low, d_high, on_path, -band, band)
         regular &= ~close_ends(u_low, u_high, on_path, -1e-12, _ANGLE_BAND)
-        # each slot's regular items, by interval ends (distance, angle)
+        # each slot's regular items by interval ends: distances on rows c, arcs on
+        # rows n_paths + c
         lists = [
-            [
-                IntervalUnions.of(low[:, at], high[:, at], owners[:, at], regular[:, at], width)
-                for low, high in ((d_low, d_high), (u_low, u_high))
-            ]
+            IntervalUnions.of(
+                np.concatenate([d_low[:, at], u_low[:, at]]),
+                np.concatenate([d_high[:, at], u_high[:, at]]),
+                np.concatenate([owners[:, at], owners[:, at]]),
+                np.concatenate([regular[:, at], regular[:, at]]),
+                width,
+            )
             for at in (slice(j * n_hyp, (j + 1) * n_hyp) for j in range(SLOTS))
         ]
-        # regular slot i of h against the regular slots j <= i: intervals and arcs overlap
-        for i in range(SLOTS):
-            c, k = np.nonzero(regular & (slot == i))
-            for j in range(i + 1):
-                rows[c, owner[k]] |= self._overlaps(lists[j], c, k, 0.0, 0.0)
-        # near ties, near misses and arcs across the heading against the regular slots
+        regulars = [np.nonzero(regular & (slot == i)) for i in range(SLOTS)]
+        # near ties, near misses and arcs across the heading: sure matches from shrunk
+        # intervals and arcs, and the others of grown ones confirmed one by one; an arc
+        # across the heading is also tested one turn up or down
         loose = finite & ~regular
-        c, k = np.nonzero(loose)
-        if len(c):
-            np.bitwise_or.at(rows, (c, owner[k]), self._loose(lists, c, k, band))
+        lc, lk = np.nonzero(loose)
+        inside, turns = self._margins(lc, lk, band)
+        found = np.zeros((len(lc), width), dtype=np.uint64)
+        for j in range(SLOTS):
+            # against the regular slots j: regular slots i >= j (both ways: R | R^T)
+            # and the loose slots, all in one pass
+            parts = [(c, k, 0.0, 0.0, 0.0) for c, k in regulars[j:]]
+            for e, turn in turns:
+                parts.append((lc[e], lk[e], inside[e], -1e-12, turn))
+                parts.append((lc[e], lk[e], 2 * band, _ANGLE_BAND, turn))
+            answers = self._overlaps(lists[j], parts)
+            for (c, k), answer in zip(regulars[j:], answers, strict=False):
+                rows[c, owner[k]] |= answer
+            sure, maybe = np.zeros_like(found), np.zeros_like(found)
+            rest = answers[SLOTS - j :]
+            for (e, _), got_sure, got_maybe in zip(turns, rest[::2], rest[1::2], strict=True):
+                sure[e] |= got_sure
+                maybe[e] |= got_maybe
+            found |= sure | self._confirm(lc, lk, maybe & ~sure, j)
+        if len(lc):
+            np.bitwise_or.at(rows, (lc, owner[lk]), found)
         # what the lists leave out, one by one: loose slots against each other, and
         # any slot not on the path's line
         stray = self.hit & ~finite
@@ -399,10 +418,9 @@ class _Items:
                 np.bitwise_or.at(rows, (c, owner[k]), found)
         return rows
 
-    def _loose(self, lists: list, c: np.ndarray, k: np.ndarray, band: float) -> np.ndarray:
-        """(E, W) owners of the regular slots that match items (c, k): sure matches
-        from shrunk intervals and arcs, and the others of grown ones confirmed one by
-        one. An arc across the heading is also tested one turn up or down."""
+    def _margins(self, c: np.ndarray, k: np.ndarray, band: float) -> tuple[np.ndarray, list]:
+        """How far the intervals of loose items (c, k) shrink for sure matches, and
+        the turns (query indices, angle shift) their arcs are tested at."""
         r_min = float(self.r[self.hit].min(initial=0.0))
         off, r = self.off[c, k], self.r[c, k]
         # off the path by x: |p - q|^2 = dd^2 + x^2 <= R^2 holds once |dd| <= R - x^2 / R
@@ -413,31 +431,22 @@ class _Items:
         for need, shift in ((u_low < 0, 2 * math.pi), (u_high > 2 * math.pi, -2 * math.pi)):
             if need.any():
                 turns.append((np.flatnonzero(need), shift))
-        found = np.zeros((len(c), lists[0][0].before.shape[-1]), dtype=np.uint64)
-        for j in range(SLOTS):
-            sure, maybe = np.zeros_like(found), np.zeros_like(found)
-            for e, turn in turns:
-                inside = -shrink[e] - 2 * band
-                sure[e] |= self._overlaps(lists[j], c[e], k[e], inside, -1e-12, turn)
-                maybe[e] |= self._overlaps(lists[j], c[e], k[e], 2 * band, _ANGLE_BAND, turn)
-            found |= sure | self._confirm(c, k, maybe & ~sure, j)
-        return found
+        return -shrink - 2 * band, turns
 
-    def _overlaps(
-        self,
-        lists: list,
-        c: np.ndarray,
-        k: np.ndarray,
-        grow_d: Any,
-        grow_u: Any,
-        shift_u: float = 0.0,
-    ) -> np.ndarray:
-        """(E, W) owners of the list's slots whose interval and arc overlap those of
-        item (c, k), its half-widths grown by `grow_d` and `grow_u` and its arc
-        turned by `shift_u`."""
-        d, r, a = self.d[c, k], self.r[c, k] + grow_d, self.a[c, k] + grow_u
-        u = self.u[c, k] + shift_u
-        return lists[0].overlapping(c, d - r, d + r) & lists[1].overlapping(c, u - a, u + a)
+    def _overlaps(self, unions: IntervalUnions, parts: list[tuple]) -> list[np.ndarray]:
+        """For each part (c, k, grow_d, grow_u, turn): the (E, W) owners of the slots
+        in `unions` whose interval and arc overlap those of items (c, k), half-widths
+        grown by `grow_d` and `grow_u` and arc turned by `turn`; one pass for all."""
+        sizes = [len(part[0]) for part in parts]
+        c, k, grow_d, grow_u, turn = (
+            np.concatenate([np.broadcast_to(p[i], n) for p, n in zip(parts, sizes, strict=True)])
+            for i in range(5)
+        )
+        d, r = self.d[c, k], self.r[c, k] + grow_d
+        u, a = self.u[c, k] + turn, self.a[c, k] + grow_u
+        n, n_paths = len(c), self.hit.shape[0]
+        both = unions.overlapping(np.r_[c, c + n_paths], np.r_[d - r, u - a], np.r_[d + r, u + a])
+        return np.split(both[:n] & both[n:], np.cumsum(sizes)[:-1])
 
     def _confirm(self, c: np.ndarray, k: np.ndarray, maybe: np.ndarray, j: int) -> np.ndarray:
         """(E, W): the owners g in `maybe` whose slot j `_match`es item (c, k)."""
