@@ -131,6 +131,15 @@ class _Search:
             return False
         return bool(self._clique(state[None], idx[:1])[0])
 
+    def _cliques(self, group: np.ndarray, idx: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """`_clique` of the groups (..., W) of classes idx (...) of `size` (...) two or
+        more; False for the others (a group of one is settled anyway)."""
+        out = np.zeros(idx.shape, dtype=bool)
+        pick = np.nonzero(size >= 2)
+        if len(pick[0]):
+            out[pick] = self._clique(group[pick], idx[pick])
+        return out
+
     def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
         inseparable from idx[i], pairwise inseparable? Tested on each class's few
@@ -176,7 +185,7 @@ class _Search:
                 # when it holds no more (as many members) and those are pairwise inseparable
                 group = self.inseparable[idx] & state
                 size = popcount(group)
-                settled |= (count == size) & self._clique(group, idx)
+                settled |= (count == size) & self._cliques(group, idx, size)
             open_ = ~stay & ~settled
         w_stay = stay.astype(float) @ w
         informative = w_stay < 1 - 1e-12
@@ -296,8 +305,8 @@ class _Search:
         if not self.any_inseparable:
             return single
         first = np.maximum(idx[:, 0], 0)
-        inside = ~np.any(sets & self.apart[first] != 0, axis=-1)
-        return single | (inside & self._clique(sets, first))
+        inside = ~np.any(sets & self.apart[first] != 0, axis=-1) & ~single
+        return single | self._cliques(sets, first, np.where(inside, 2, 0))
 
     def _bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """(n,) min over paths of the one-touch bound of each set T (n, W) with
@@ -315,8 +324,8 @@ class _Search:
         settled = count <= 1
         if self.any_inseparable:
             group = self.inseparable[g] & sets[:, None, :]
-            clique = self._clique(group.reshape(-1, group.shape[-1]), g.reshape(-1))
-            settled |= (count == popcount(group)[..., None]) & clique.reshape(g.shape)[..., None]
+            size = popcount(group)
+            settled |= (count == size[..., None]) & self._cliques(group, g, size)[..., None]
         open_ = ~stay & ~settled & real[..., None]
         w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
         w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
