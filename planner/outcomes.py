@@ -480,20 +480,24 @@ class _Items:
         """(E, W) hypotheses one of whose `targets` slots (c, items) matches item (c, k)."""
         n_hyp = len(owner) // SLOTS
         at = compact(targets)
-        size = (at >= 0).sum(axis=1)[c]
+        member = at >= 0
+        theirs = self._slots_at(np.arange(len(targets))[:, None], np.maximum(at, 0))
+        size = member.sum(axis=1)[c]
         out = np.zeros((len(c), n_words(n_hyp)), dtype=np.uint64)
-        # every (query, target) pair once, in batches of about `chunk` pairs
-        ends = np.searchsorted(np.cumsum(size), np.arange(chunk, size.sum() + 1, chunk))
-        for lo, hi in zip(np.r_[0, ends], np.r_[ends, len(c)], strict=True):
-            if hi <= lo:
-                continue
-            e = np.repeat(np.arange(lo, hi), size[lo:hi])
-            first = np.cumsum(size[lo:hi]) - size[lo:hi]
-            t = at[c[e], np.arange(len(e)) - np.repeat(first, size[lo:hi])]
-            ok = _match(self._slots_at(c[e], k[e]), self._slots_at(c[e], t))
-            hits = np.zeros((hi - lo, n_hyp), dtype=bool)
-            hits[e[ok] - lo, owner[t[ok]]] = True
-            out[lo:hi] = pack_bits(hits)
+        # queries with as many targets to within a factor two together, each batch as
+        # wide as its widest path and of about `chunk` pairs
+        level = np.ceil(np.log2(np.maximum(size, 1))).astype(int)
+        for lvl in np.unique(level[size > 0]):
+            group = np.flatnonzero((level == lvl) & (size > 0))
+            width = int(size[group].max())
+            for pick in np.array_split(group, -(-len(group) * width // chunk)):
+                cc, kk = c[pick], k[pick]
+                mine = self._slots_at(cc[:, None], kk[:, None])
+                rows = _Slots(*(getattr(theirs, f.name)[cc, :width] for f in fields(_Slots)))
+                e, t = np.nonzero(_match(mine, rows) & member[cc, :width])
+                hits = np.zeros((len(cc), n_hyp), dtype=bool)
+                hits[e, owner[at[cc[e], t]]] = True
+                out[pick] = pack_bits(hits)
         return out
 
 
