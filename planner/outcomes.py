@@ -211,8 +211,8 @@ def confusability(
     """
     n_hyp = len(posed)
     rows = _match_rows(posed, outcomes, sensor, config)
-    conf = unpack_bits(rows | transpose_bits(rows, n_hyp), n_hyp)
-    return conf | (posed.cls[:, None] == posed.cls[None, :])
+    rows |= transpose_bits(rows, n_hyp) | _miss_bits(outcomes, np.arange(n_hyp), n_hyp)
+    return unpack_bits(rows, n_hyp) | (posed.cls[:, None] == posed.cls[None, :])
 
 
 def class_survivors(
@@ -239,15 +239,27 @@ def class_bits(
     # hypotheses in class order: rows and bits of one class side by side
     order = np.argsort(posed.cls, kind="stable")
     rows = _match_rows(posed, outcomes, sensor, config, order)
+    misses = _miss_bits(outcomes, posed.cls, n_cls)
     if n_cls == n_hyp:  # one hypothesis per class: R is the class relation
-        return rows | transpose_bits(rows, n_hyp)
+        return rows | transpose_bits(rows, n_hyp) | misses
     by_class = posed.cls[order]
     first = np.flatnonzero(np.r_[True, by_class[1:] != by_class[:-1]])
     # X[c, A, g] = OR_{h in A} R[c, h, g]; then Y[c, B, A] = OR_{g in B} X[c, A, g]
     y = transpose_bits(np.bitwise_or.reduceat(rows, first, axis=1), n_hyp)
     y = np.bitwise_or.reduceat(y, first, axis=1)
     # confusability is symmetric: conf = Y | Y^T
-    return y | transpose_bits(y, n_cls)
+    return y | transpose_bits(y, n_cls) | misses
+
+
+def _miss_bits(outcomes: Outcomes, group: np.ndarray, n_groups: int) -> np.ndarray:
+    """(C, n_groups, W): misses match misses, so on each path every group (hypothesis
+    or class) with a missing outcome slot is confusable with every other such group;
+    `group` (H,) is each hypothesis' group."""
+    missing = (outcomes.slot_valid & ~outcomes.slot_hit).any(axis=-1)
+    found = np.zeros((len(missing), n_groups), dtype=bool)
+    c, h = np.nonzero(missing)
+    found[c, group[h]] = True
+    return np.where(found[..., None], pack_bits(found)[:, None, :], np.uint64(0))
 
 
 #: Angle margin (radians) where the cosine test's 1e-12 slack can still decide:
@@ -267,7 +279,7 @@ def _match_rows(
     order: np.ndarray | None = None,
 ) -> np.ndarray:
     """(C, H, W) bitsets R over hypotheses (taken in `order`, default as given) such
-    that R | R^T is the confusability.
+    that R | R^T is the confusability of hits (misses: `_miss_bits`).
 
     Slot points lie on the path (a near miss's closest approach aside), so two
     hits match when their intervals ``distance +- reach`` and their normal arcs
@@ -276,8 +288,8 @@ def _match_rows(
     R[c, h] holds the g one of whose slots matches a slot of h at least as far
     down the slot list. Slots near a tie (ends within rounding, or within the
     cosine test's slack, of another's) and near misses bound their matches from
-    inside and outside and test what lies between one by one (`_match`), as do
-    arcs across the heading.
+    inside and outside and test what lies between one by one (`_match`); arcs
+    across the heading are also tested one turn up or down.
     """
     config = config or OutcomeConfig()
     n_paths, n_hyp = outcomes.hit.shape
@@ -346,12 +358,7 @@ class _Items:
         owner, slot = np.arange(n_items) % n_hyp, np.arange(n_items) // n_hyp
         owners = np.broadcast_to(owner, self.hit.shape)
         rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
-        # misses match misses: slot i of h meets every missing slot j <= i of any g
-        miss = (self.valid & ~self.hit).reshape(n_paths, SLOTS, n_hyp)
-        seen = np.bitwise_or.accumulate(pack_bits(miss), axis=1)  # (c, SLOTS, W)
-        for i in range(SLOTS):
-            c, h = np.nonzero(miss[:, i])
-            rows[c, h] |= seen[c, i]
+        # (misses match misses: see `_miss_bits`)
         if self.hit.sum(axis=1).max(initial=0) <= _FEW_HITS:  # few: every pair one by one
             return rows | self._all_pairs(owner)
         # arcs clear of the cut at the heading overlap iff their intervals do
