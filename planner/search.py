@@ -24,6 +24,11 @@ prunes the paths at every node (branch and bound), and values are memoized on
 (state bitset, depth); values known to be exact (depth >= classes - 1, or no
 depth limit) are shared between depths. Without a depth limit the search is
 the exact dynamic programme over survivor sets (`optimal`).
+
+Two touches deep (the default lookahead) the root paths' children are valued
+one touch deep in large batches instead: the children of paths whose values
+lie close together are nearly all needed anyway. One-touch values take the
+minimum over the paths no other path dominates (:func:`undominated`).
 """
 
 from __future__ import annotations
@@ -42,9 +47,11 @@ from planner.outcomes import SurvivorTable
 __all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value", "undominated"]
 
 #: Children of one path evaluated together one touch deep, and the most words
-#: (paths x members x words) one batch of them may take.
+#: (paths x members x words) one batch of them may take; children of root paths
+#: valued together when the search is two touches deep.
 _BATCH = 64
 _BATCH_ELEMENTS = 2_000_000
+_GROUP = 256
 
 
 class _OutOfTimeError(Exception):
@@ -261,16 +268,16 @@ class _Search:
         bound min_P (1 + w(open | T)) / (1 - w(stay | T)), or 0 if T is settled."""
         self.deadline.check()
         out = np.empty(len(sets))
-        missing = []
+        missing: dict[bytes, list[int]] = {}  # each set not known yet, once
         for i, state in enumerate(sets):
             key = state.tobytes()
             known = self.exact.get(key, self.limited.get((key, 1)))
             if known is None:
-                missing.append(i)
+                missing.setdefault(key, []).append(i)
             else:
                 out[i] = known
         if missing:
-            todo = sets[missing]
+            todo = sets[[where[0] for where in missing.values()]]
             found = np.empty(len(todo))
             size = popcount(todo)
             # similar sizes together, each batch padded to its largest set and kept
@@ -282,6 +289,7 @@ class _Search:
                 hi = lo + 1
                 while hi < len(order) and (hi + 1 - lo) * size[order[hi]] <= budget:
                     hi += 1
+                self.deadline.check()
                 pick = order[lo:hi]
                 m = int(size[pick].max())
                 # members of each set, padded with -1 (one row per set)
@@ -290,7 +298,8 @@ class _Search:
                 settled = self._settled_many(todo[pick], idx)
                 found[pick] = np.where(settled, 0.0, self._bound_one(todo[pick], idx))
                 lo = hi
-            out[missing] = found
+            for where, v in zip(missing.values(), found, strict=True):
+                out[where] = v
             for state, v, m in zip(todo, found, size, strict=True):
                 # one touch deep is the exact value for sets of at most two classes
                 if v == 0.0 or m <= 2:
@@ -319,13 +328,22 @@ class _Search:
         # w(h|T), uniform when T weighs nothing
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
         # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
-        count = popcount(self.leaf_by_class[g] & sets[:, None, None, :])
+        rows = self.leaf_by_class[g]
+        count = popcount(np.bitwise_and(rows, sets[:, None, None, :], out=rows))
         stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
         settled = count <= 1
         if self.any_inseparable:
+            # (a group of one is settled by the count already)
             group = self.inseparable[g] & sets[:, None, :]
             size = popcount(group)
-            settled |= (count == size[..., None]) & self._cliques(group, g, size)[..., None]
+            pick = np.nonzero(size >= 2)
+            if len(pick[0]):
+                # some path leaves h with exactly its group: settled if that is a clique
+                only = count[pick] == size[pick][:, None]
+                some = np.flatnonzero(only.any(axis=1))
+                clique = self._clique(group[pick][some], g[pick][some])
+                at = (pick[0][some], pick[1][some])
+                settled[at] |= only[some] & clique[:, None]
         open_ = ~stay & ~settled & real[..., None]
         w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
         w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
@@ -361,6 +379,9 @@ class _Search:
         child_depth = None if depth is None else depth - 1
         live = paths[np.isfinite(node.bound[paths])]
         order = live[np.argsort(node.bound[live] + extra[live], kind="stable")]
+        if child_depth == 1:
+            truncated = self._rank_two(node, order, top_k, extra, value, exact)
+            return SearchResult(value, exact, truncated, self.states)
         best: list[float] = []  # sorted exact objectives found so far
         truncated = False
         for c in order:
@@ -377,6 +398,48 @@ class _Search:
                 exact[c] = True
                 bisect.insort(best, v + extra[c])
         return SearchResult(value, exact, truncated, self.states)
+
+    def _rank_two(
+        self,
+        node: _Node,
+        order: np.ndarray,
+        top_k: int | None,
+        extra: np.ndarray,
+        value: np.ndarray,
+        exact: np.ndarray,
+    ) -> bool:
+        """Root paths two touches deep, in `order`, a group at a time: all children
+        of a group are valued one touch deep together. (Branch and bound would value
+        nearly all of them anyway: counting one touch per child the bounds of paths
+        with close values prune little.) Stops at the first path whose bound reaches
+        the top_k-th exact objective; fills `value` and `exact` of the paths done and
+        returns whether the deadline stopped it."""
+        best: list[float] = []  # sorted exact objectives found so far
+        lo = 0
+        while lo < len(order):
+            threshold = best[top_k - 1] if top_k is not None and len(best) >= top_k else np.inf
+            hi, children = lo, 0
+            while hi < len(order) and (hi == lo or children < _GROUP):
+                if node.bound[order[hi]] + extra[order[hi]] >= threshold:
+                    break
+                children += int(node.open[order[hi]].sum())
+                hi += 1
+            if hi == lo:
+                return False
+            group = order[lo:hi]
+            at, k = np.nonzero(node.open[group])
+            try:
+                values = self.values_one(node.child[group[at], k])
+            except _OutOfTimeError:
+                return True
+            # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
+            total = 1.0 + np.bincount(at, weights=node.weight[k] * values, minlength=len(group))
+            value[group] = total / (1.0 - node.w_stay[group])
+            exact[group] = True
+            for v in value[group] + extra[group]:
+                bisect.insort(best, float(v))
+            lo = hi
+        return False
 
 
 def undominated(bits: np.ndarray) -> np.ndarray:

@@ -227,11 +227,12 @@ def test_inseparable_classes_end_the_search():
     assert state_value(table, None, state=np.array([False, True, True])) == 0.0
 
 
-def test_deadline_stops_the_search():
+@pytest.mark.parametrize("depth", [None, 2])
+def test_deadline_stops_the_search(depth):
     rng = np.random.default_rng(0)
     conf = rng.random((30, 12, 12)) < 0.4
     table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(12))
-    result = expected_remaining(table, None, deadline=Deadline(end=0.0))
+    result = expected_remaining(table, depth, deadline=Deadline(end=0.0))
     assert result.truncated
     assert not result.exact[np.isfinite(result.value)].any()
     with pytest.raises(TimeoutError):
