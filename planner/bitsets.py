@@ -287,18 +287,13 @@ class IntervalUnions:
         ok = at >= 0
         kept = np.maximum(at, 0)
         lists = []
-        for ends in (low, high):
+        for ends, reverse in ((low, False), (high, True)):
             values = np.where(ok, ends[path, kept], np.inf)
             order = np.argsort(values, axis=1)
             sorted_owner = np.where(ok, owner[path, kept], -1)[path, order]
-            lists.append((values[path, order], one_hot(sorted_owner, width)))
-        (low_sorted, low_sets), (high_sorted, high_sets) = lists
-        return cls(
-            low_sorted,
-            high_sorted,
-            prefix_or(low_sets, axis=1),
-            prefix_or(high_sets, axis=1, reverse=True),
-        )
+            lists.append((values[path, order], _running_unions(sorted_owner, width, reverse)))
+        (low_sorted, before), (high_sorted, after) = lists
+        return cls(low_sorted, high_sorted, before, after)
 
     def overlapping(self, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(E, W) owners on row rows[e] of intervals meeting [lo[e], hi[e]]:
@@ -306,6 +301,20 @@ class IntervalUnions:
         k_low = sorted_count(self.low, rows, hi, "right")
         k_high = sorted_count(self.high, rows, lo, "left")
         return self.before[rows, k_low] & self.after[rows, k_high]
+
+
+def _running_unions(owner: np.ndarray, width: int, reverse: bool) -> np.ndarray:
+    """``prefix_or(one_hot(owner, width), axis=1, reverse=reverse)`` for (rows, N)
+    owner bits (negative: none), built in place in the (rows, N + 1, W) result."""
+    out = np.zeros((owner.shape[0], owner.shape[1] + 1, width), dtype=np.uint64)
+    r, k = np.nonzero(owner >= 0)
+    bit = owner[r, k]
+    out[r, k if reverse else k + 1, bit // 64] = np.left_shift(
+        np.uint64(1), (bit % 64).astype(np.uint64)
+    )
+    view = out[:, ::-1] if reverse else out
+    np.bitwise_or.accumulate(view, axis=1, out=view)
+    return out
 
 
 def close_ends(
