@@ -16,7 +16,7 @@ import shapely
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
-from planner import outcomes
+from planner import matching
 from planner.bitsets import (
     IntervalUnions,
     close_ends,
@@ -28,15 +28,13 @@ from planner.bitsets import (
     weighted_count,
 )
 from planner.geometry import make_stable_pose, wrap_angle
+from planner.matching import SLOTS, Slots, slots_match
 from planner.outcomes import (
-    SLOTS,
     CandidateConfig,
     Candidates,
     OutcomeConfig,
     Outcomes,
     SurvivorTable,
-    _match,
-    _Slots,
     class_survivors,
     confusability,
     contains_points,
@@ -326,12 +324,12 @@ def class_scenes(draw):
 
 
 def dense_confusability(posed, out, sensor):
-    """Every outcome slot of h against every slot of g, pair by pair (`_match`)."""
-    slots = _Slots.of(posed, out, sensor)
-    columns = [getattr(slots, f.name) for f in dataclasses.fields(_Slots)]
-    mine = _Slots(*(col[:, :, None, :, None] for col in columns))
-    theirs = _Slots(*(col[:, None, :, None, :] for col in columns))
-    return _match(mine, theirs).any(axis=(-1, -2)) | (posed.cls[:, None] == posed.cls[None, :])
+    """Every outcome slot of h against every slot of g, pair by pair (`slots_match`)."""
+    slots = Slots.of(posed, out, sensor)
+    columns = [getattr(slots, f.name) for f in dataclasses.fields(Slots)]
+    mine = Slots(*(col[:, :, None, :, None] for col in columns))
+    theirs = Slots(*(col[:, None, :, None, :] for col in columns))
+    return slots_match(mine, theirs).any(axis=(-1, -2)) | (posed.cls[:, None] == posed.cls[None, :])
 
 
 @settings(max_examples=60, deadline=None)
@@ -421,13 +419,13 @@ def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
         slot_offset=offset,
         heading=heading,
     )
-    slots = _Slots.of(posed, out, sensor)
+    slots = Slots.of(posed, out, sensor)
     u = np.mod(angle - heading[:, None, None], 2 * math.pi)
     if (hit & ((u - slots.alpha < 0) | (u + slots.alpha > 2 * math.pi))).any():
         event("an arc across the heading")
     with pytest.MonkeyPatch.context() as patch:
         if every_path:
-            patch.setattr(outcomes, "_FEW_HITS", 0)
+            patch.setattr(matching, "_FEW_HITS", 0)
         conf = confusability(posed, out, sensor)
         table = class_survivors(posed, out, sensor)
     np.testing.assert_array_equal(conf, dense_confusability(posed, out, sensor))
