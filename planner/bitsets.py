@@ -25,6 +25,7 @@ __all__ = [
     "SurvivorTable",
     "close_ends",
     "compact",
+    "inseparable_neighbours",
     "n_words",
     "one_hot",
     "pack_bits",
@@ -33,6 +34,7 @@ __all__ = [
     "sorted_count",
     "to_int",
     "transpose_bits",
+    "undominated",
     "unpack_bits",
     "weighted_count",
 ]
@@ -344,3 +346,44 @@ def close_ends(
     slot = at[r, order[r, p] - n]
     out[r[slot >= 0], slot[slot >= 0]] = True
     return out & member
+
+
+def undominated(bits: np.ndarray) -> np.ndarray:
+    """Indices of the paths (C, K, W) that no other path dominates, the first of
+    identical ones kept.
+
+    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h: whatever
+    the truth, Q leaves no more classes than Q' (:mod:`planner.search` uses it for
+    one-touch values).
+
+    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
+    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
+    [1]
+    """
+    n = len(bits)
+    flat = np.asarray(bits, dtype=np.uint64).reshape(n, -1)
+    # within[q, r]: S_q(h) within S_r(h) for every h
+    within = np.empty((n, n), dtype=bool)
+    step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
+    for lo in range(0, n, step):
+        within[lo : lo + step] = ~np.any(flat[lo : lo + step, None] & ~flat[None], axis=-1)
+    first = np.arange(n)[:, None] < np.arange(n)[None, :]
+    beaten = (within & ~within.T) | (within & within.T & first)
+    return np.flatnonzero(~beaten.any(axis=0))
+
+
+def inseparable_neighbours(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
+    G-bit masks over that list, which of them are separable from each (K, G);
+    (None, None) when some class has more than 64 inseparable classes."""
+    size = together.sum(axis=1)
+    width = int(size.max(initial=1))
+    if width > 64:
+        return None, None
+    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
+    ok = np.take_along_axis(together, order, axis=1)
+    near = np.where(ok, order, -1)
+    at = np.maximum(near, 0)
+    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
+    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
+    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)

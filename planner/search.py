@@ -41,10 +41,10 @@ from typing import Any
 
 import numpy as np
 
-from planner.bitsets import pack_bits, popcount, unpack_bits
+from planner.bitsets import inseparable_neighbours, pack_bits, popcount, undominated, unpack_bits
 from planner.outcomes import SurvivorTable
 
-__all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value", "undominated"]
+__all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value"]
 
 #: Children of one path evaluated together one touch deep, and the most words
 #: (paths x members x words) one batch of them may take; children of root paths
@@ -112,7 +112,7 @@ class _Search:
         self.separable = ~unpack_bits(table.inseparable, self.n)
         self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
         self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
-        self.near, self.near_apart = _neighbourhoods(~self.separable)
+        self.near, self.near_apart = inseparable_neighbours(~self.separable)
         self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
         self.one_word = self.bits.shape[-1] == 1
         self.deadline = deadline
@@ -122,7 +122,13 @@ class _Search:
 
     @cached_property
     def leaf(self) -> np.ndarray:
-        """The paths one touch deep values need: no other path dominates them."""
+        """The paths one touch deep values need: no other path dominates them.
+
+        If S_Q(h) is within S_Q'(h) for every h, then in any state T every member
+        Q' leaves settled Q does too and every member Q leaves with T Q' does too;
+        (1 + o) / (1 - s) grows with s and with o + s, so Q's one-touch bound
+        ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above Q''s. (Deeper
+        values need not follow: E is not monotone in the set.)"""
         return undominated(self.bits)
 
     @cached_property
@@ -440,50 +446,6 @@ class _Search:
                 bisect.insort(best, float(v))
             lo = hi
         return False
-
-
-def undominated(bits: np.ndarray) -> np.ndarray:
-    """Indices of the paths (C, K, W) that no other path dominates, the first of
-    identical ones kept.
-
-    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h. Then in any
-    state T every member that Q' leaves settled Q does too, and every member Q
-    leaves with T, Q' does too; since (1 + o) / (1 - s) grows with s and with o + s,
-    Q's one-touch bound ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above
-    Q''s: the smallest bound over the undominated paths is the smallest over all.
-    (Deeper values need not follow: E is not monotone in the set.)
-
-    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
-    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
-    [1]
-    """
-    n = len(bits)
-    flat = np.asarray(bits, dtype=np.uint64).reshape(n, -1)
-    # within[q, r]: S_q(h) within S_r(h) for every h
-    within = np.empty((n, n), dtype=bool)
-    step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
-    for lo in range(0, n, step):
-        within[lo : lo + step] = ~np.any(flat[lo : lo + step, None] & ~flat[None], axis=-1)
-    first = np.arange(n)[:, None] < np.arange(n)[None, :]
-    beaten = (within & ~within.T) | (within & within.T & first)
-    return np.flatnonzero(~beaten.any(axis=0))
-
-
-def _neighbourhoods(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
-    G-bit masks over that list, which of them are separable from each (K, G);
-    (None, None) when some class has more than 64 inseparable classes."""
-    size = together.sum(axis=1)
-    width = int(size.max(initial=1))
-    if width > 64:
-        return None, None
-    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
-    ok = np.take_along_axis(together, order, axis=1)
-    near = np.where(ok, order, -1)
-    at = np.maximum(near, 0)
-    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
-    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
-    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)
 
 
 def _batches(n: int, first: int) -> list[tuple[int, int]]:

@@ -15,6 +15,7 @@ import shapely
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from planner.bitsets import undominated
 from planner.geometry import make_stable_pose
 from planner.outcomes import (
     SurvivorTable,
@@ -33,7 +34,6 @@ from planner.scoring import (
     motion_cost,
     state_value,
 )
-from planner.search import undominated
 from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose, SensorBounds, Workspace
 
 
