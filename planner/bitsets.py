@@ -360,16 +360,18 @@ def undominated(bits: np.ndarray) -> np.ndarray:
     >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
     [1]
     """
-    n = len(bits)
-    flat = np.asarray(bits, dtype=np.uint64).reshape(n, -1)
+    flat = np.asarray(bits, dtype=np.uint64).reshape(len(bits), -1)
+    # the first of each group of identical paths, then dominance among those
+    _, first = np.unique(flat, axis=0, return_index=True)
+    first = np.sort(first)
+    rows, n = flat[first], len(first)
     # within[q, r]: S_q(h) within S_r(h) for every h
     within = np.empty((n, n), dtype=bool)
     step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
     for lo in range(0, n, step):
-        within[lo : lo + step] = ~np.any(flat[lo : lo + step, None] & ~flat[None], axis=-1)
-    first = np.arange(n)[:, None] < np.arange(n)[None, :]
-    beaten = (within & ~within.T) | (within & within.T & first)
-    return np.flatnonzero(~beaten.any(axis=0))
+        within[lo : lo + step] = ~np.any(rows[lo : lo + step, None] & ~rows[None], axis=-1)
+    np.fill_diagonal(within, False)
+    return first[~within.any(axis=0)]
 
 
 def inseparable_neighbours(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
