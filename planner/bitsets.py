@@ -25,6 +25,7 @@ __all__ = [
     "SurvivorTable",
     "close_ends",
     "compact",
+    "inseparable_neighbours",
     "n_words",
     "one_hot",
     "pack_bits",
@@ -33,6 +34,7 @@ __all__ = [
     "sorted_count",
     "to_int",
     "transpose_bits",
+    "undominated",
     "unpack_bits",
     "weighted_count",
 ]
@@ -287,18 +289,13 @@ class IntervalUnions:
         ok = at >= 0
         kept = np.maximum(at, 0)
         lists = []
-        for ends in (low, high):
+        for ends, reverse in ((low, False), (high, True)):
             values = np.where(ok, ends[path, kept], np.inf)
             order = np.argsort(values, axis=1)
             sorted_owner = np.where(ok, owner[path, kept], -1)[path, order]
-            lists.append((values[path, order], one_hot(sorted_owner, width)))
-        (low_sorted, low_sets), (high_sorted, high_sets) = lists
-        return cls(
-            low_sorted,
-            high_sorted,
-            prefix_or(low_sets, axis=1),
-            prefix_or(high_sets, axis=1, reverse=True),
-        )
+            lists.append((values[path, order], _running_unions(sorted_owner, width, reverse)))
+        (low_sorted, before), (high_sorted, after) = lists
+        return cls(low_sorted, high_sorted, before, after)
 
     def overlapping(self, rows: np.ndarray, lo: np.ndarray, hi: np.ndarray) -> np.ndarray:
         """(E, W) owners on row rows[e] of intervals meeting [lo[e], hi[e]]:
@@ -306,6 +303,20 @@ class IntervalUnions:
         k_low = sorted_count(self.low, rows, hi, "right")
         k_high = sorted_count(self.high, rows, lo, "left")
         return self.before[rows, k_low] & self.after[rows, k_high]
+
+
+def _running_unions(owner: np.ndarray, width: int, reverse: bool) -> np.ndarray:
+    """``prefix_or(one_hot(owner, width), axis=1, reverse=reverse)`` for (rows, N)
+    owner bits (negative: none), built in place in the (rows, N + 1, W) result."""
+    out = np.zeros((owner.shape[0], owner.shape[1] + 1, width), dtype=np.uint64)
+    r, k = np.nonzero(owner >= 0)
+    bit = owner[r, k]
+    out[r, k if reverse else k + 1, bit // 64] = np.left_shift(
+        np.uint64(1), (bit % 64).astype(np.uint64)
+    )
+    view = out[:, ::-1] if reverse else out
+    np.bitwise_or.accumulate(view, axis=1, out=view)
+    return out
 
 
 def close_ends(
@@ -335,3 +346,46 @@ def close_ends(
     slot = at[r, order[r, p] - n]
     out[r[slot >= 0], slot[slot >= 0]] = True
     return out & member
+
+
+def undominated(bits: np.ndarray) -> np.ndarray:
+    """Indices of the paths (C, K, W) that no other path dominates, the first of
+    identical ones kept.
+
+    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h: whatever
+    the truth, Q leaves no more classes than Q' (:mod:`planner.search` uses it for
+    one-touch values).
+
+    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
+    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
+    [1]
+    """
+    flat = np.asarray(bits, dtype=np.uint64).reshape(len(bits), -1)
+    # the first of each group of identical paths, then dominance among those
+    _, first = np.unique(flat, axis=0, return_index=True)
+    first = np.sort(first)
+    rows, n = flat[first], len(first)
+    # within[q, r]: S_q(h) within S_r(h) for every h
+    within = np.empty((n, n), dtype=bool)
+    step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
+    for lo in range(0, n, step):
+        within[lo : lo + step] = ~np.any(rows[lo : lo + step, None] & ~rows[None], axis=-1)
+    np.fill_diagonal(within, False)
+    return first[~within.any(axis=0)]
+
+
+def inseparable_neighbours(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
+    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
+    G-bit masks over that list, which of them are separable from each (K, G);
+    (None, None) when some class has more than 64 inseparable classes."""
+    size = together.sum(axis=1)
+    width = int(size.max(initial=1))
+    if width > 64:
+        return None, None
+    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
+    ok = np.take_along_axis(together, order, axis=1)
+    near = np.where(ok, order, -1)
+    at = np.maximum(near, 0)
+    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
+    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
+    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)

@@ -337,13 +337,16 @@ def _blocking_pairs(
         face = np.tile(np.arange(len(fh)), len(pts))
     else:
         q, face = _bucket_pairs(posed, sensor, pts, owner, angle, face_angle, n_buckets)
-    h, f, g = fh[face], ff[face], owner[q]
-    p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
+    # the normals first (one gather each), the distances of the pairs they leave
+    h, g = fh[face], owner[q]
     n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
-    s, e, p = posed.start[h, f], posed.end[h, f], pts[q]
-    dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
     turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
-    ok = (dist <= p_tol + 1e-9 * posed.scale) & (turn <= n_tol + 1e-9)
+    keep = turn <= n_tol + 1e-9
+    q, face, h, g = q[keep], face[keep], h[keep], g[keep]
+    p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
+    s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
+    dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
+    ok = dist <= p_tol + 1e-9 * posed.scale
     return q[ok], h[ok]
 
 

@@ -14,8 +14,9 @@ in radians (counter-clockwise positive). The pipeline is three numpy passes:
    equivalence classes as bitsets (:class:`SurvivorTable`). Slot points lie on
    the path, so a match is an overlap of intervals along it and of normal arcs:
    sorted interval ends answer all pairs at once with unions of bitsets, and
-   only slots near a tie (or off the path) are compared one by one. The
-   hypothesis-level matrix (:func:`confusability`) comes from the same pass.
+   only slots near a tie (or off the path) are compared one by one
+   (:mod:`planner.matching`). The hypothesis-level matrix
+   (:func:`confusability`) comes from the same pass.
 
 Posed hypotheses live in :mod:`planner.posed` and candidate paths in
 :mod:`planner.candidates`; both are re-exported here.
@@ -25,22 +26,13 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass, fields
-from typing import Any
 
 import numpy as np
 
-from planner.bitsets import (
-    IntervalUnions,
-    SurvivorTable,
-    close_ends,
-    compact,
-    n_words,
-    pack_bits,
-    transpose_bits,
-    unpack_bits,
-)
+from planner.bitsets import SurvivorTable, transpose_bits, unpack_bits
 from planner.candidates import CandidateConfig, Candidates, generate_candidates
 from planner.errors import PlannerError
+from planner.matching import match_rows, miss_bits
 from planner.posed import PosedSet, cast_paths, contains_points, pose_hypotheses
 from planner.types import SensorBounds
 
@@ -60,9 +52,6 @@ __all__ = [
     "predict_outcomes",
     "survivor_table",
 ]
-
-#: Outcome slots per (path, hypothesis): nominal, vertex/near-miss alternative, slip-through.
-SLOTS = 3
 
 
 @dataclass(frozen=True)
@@ -211,9 +200,10 @@ def confusability(
     members of one equivalence class are always confusable.
     """
     n_hyp = len(posed)
-    rows = _match_rows(posed, outcomes, sensor, config)
-    conf = unpack_bits(rows | transpose_bits(rows, n_hyp), n_hyp)
-    return conf | (posed.cls[:, None] == posed.cls[None, :])
+    chunk = (config or OutcomeConfig()).chunk_elements
+    rows = match_rows(posed, outcomes, sensor, chunk)
+    rows |= transpose_bits(rows, n_hyp) | miss_bits(outcomes, np.arange(n_hyp), n_hyp)
+    return unpack_bits(rows, n_hyp) | (posed.cls[:, None] == posed.cls[None, :])
 
 
 def class_survivors(
@@ -239,287 +229,17 @@ def class_bits(
     n_hyp, n_cls = len(posed), posed.n_classes
     # hypotheses in class order: rows and bits of one class side by side
     order = np.argsort(posed.cls, kind="stable")
-    rows = _match_rows(posed, outcomes, sensor, config, order)
+    rows = match_rows(posed, outcomes, sensor, (config or OutcomeConfig()).chunk_elements, order)
+    misses = miss_bits(outcomes, posed.cls, n_cls)
     if n_cls == n_hyp:  # one hypothesis per class: R is the class relation
-        return rows | transpose_bits(rows, n_hyp)
+        return rows | transpose_bits(rows, n_hyp) | misses
     by_class = posed.cls[order]
     first = np.flatnonzero(np.r_[True, by_class[1:] != by_class[:-1]])
     # X[c, A, g] = OR_{h in A} R[c, h, g]; then Y[c, B, A] = OR_{g in B} X[c, A, g]
     y = transpose_bits(np.bitwise_or.reduceat(rows, first, axis=1), n_hyp)
     y = np.bitwise_or.reduceat(y, first, axis=1)
     # confusability is symmetric: conf = Y | Y^T
-    return y | transpose_bits(y, n_cls)
-
-
-#: Angle margin (radians) where the cosine test's 1e-12 slack can still decide:
-#: cos(A) - 1e-12 = cos(A + x) needs x <= sqrt(2e-12) ~ 1.42e-6.
-_ANGLE_BAND = 1.5e-6
-
-#: Hit slots per path up to which every pair is compared one by one (cheaper than
-#: sorting intervals when there are few).
-_FEW_HITS = 24
-
-
-def _match_rows(
-    posed: PosedSet,
-    outcomes: Outcomes,
-    sensor: SensorBounds,
-    config: OutcomeConfig | None = None,
-    order: np.ndarray | None = None,
-) -> np.ndarray:
-    """(C, H, W) bitsets R over hypotheses (taken in `order`, default as given) such
-    that R | R^T is the confusability.
-
-    Slot points lie on the path (a near miss's closest approach aside), so two
-    hits match when their intervals ``distance +- reach`` and their normal arcs
-    ``angle +- alpha`` both overlap; sorted interval ends turn these tests into
-    prefix and suffix unions of bitsets (:class:`~planner.bitsets.IntervalUnions`).
-    R[c, h] holds the g one of whose slots matches a slot of h at least as far
-    down the slot list. Slots near a tie (ends within rounding, or within the
-    cosine test's slack, of another's) and near misses bound their matches from
-    inside and outside and test what lies between one by one (`_match`), as do
-    arcs across the heading.
-    """
-    config = config or OutcomeConfig()
-    n_paths, n_hyp = outcomes.hit.shape
-    slots = _Slots.of(posed, outcomes, sensor)
-    width = n_words(n_hyp)
-    rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
-    chunk = max(1, config.chunk_elements // max(1, SLOTS * n_hyp * width))
-    for lo in range(0, n_paths, chunk):
-        part = slice(lo, min(lo + chunk, n_paths))
-        items = _Items.of(outcomes, slots, part, np.arange(n_hyp) if order is None else order)
-        rows[items.part] = items.rows(posed, width, config.chunk_elements)
-    return rows
-
-
-@dataclass(frozen=True, eq=False)
-class _Items:
-    """The outcome slots of some paths as items (c, SLOTS H), item k = slot k // H
-    of hypothesis k % H: `valid`, `hit`, interval centre `d` (along the path) and
-    half-width `r`, `off` (distance off the path), normal angle `u` from the
-    heading in [0, 2 pi) with half-width `a`; `slots` (C, H, SLOTS) and the
-    hypothesis `order` give every item's fields for the one-by-one tests."""
-
-    part: slice
-    order: np.ndarray
-    valid: np.ndarray
-    hit: np.ndarray
-    d: np.ndarray
-    r: np.ndarray
-    off: np.ndarray
-    u: np.ndarray
-    a: np.ndarray
-    slots: _Slots
-
-    @classmethod
-    def of(cls, o: Outcomes, slots: _Slots, part: slice, order: np.ndarray) -> _Items:
-        n_paths = part.stop - part.start
-        flat = lambda a: np.swapaxes(a[part][:, order], 1, 2).reshape(n_paths, -1)  # noqa: E731
-        hit = flat(o.slot_hit & o.slot_valid)
-        # angles from the path's heading: hit normals face back along it
-        u = np.mod(flat(o.slot_angle) - o.heading[part, None], 2 * math.pi)
-        off = np.where(hit, np.abs(flat(o.slot_offset)), np.inf)
-        return cls(
-            part,
-            order,
-            flat(o.slot_valid),
-            hit,
-            flat(o.slot_distance),
-            flat(slots.reach),
-            off,
-            u,
-            flat(slots.alpha),
-            slots,
-        )
-
-    def _slots_at(self, c: np.ndarray, k: np.ndarray) -> _Slots:
-        """The slot fields of items (c, k) (broadcast)."""
-        n_hyp = len(self.order)
-        at = (c + self.part.start, self.order[k % n_hyp], k // n_hyp)
-        return _Slots(*(getattr(self.slots, f.name)[at] for f in fields(_Slots)))
-
-    def rows(self, posed: PosedSet, width: int, chunk_elements: int) -> np.ndarray:
-        n_paths, n_items = self.hit.shape
-        n_hyp = n_items // SLOTS
-        owner, slot = np.arange(n_items) % n_hyp, np.arange(n_items) // n_hyp
-        owners = np.broadcast_to(owner, self.hit.shape)
-        rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
-        # misses match misses: slot i of h meets every missing slot j <= i of any g
-        miss = (self.valid & ~self.hit).reshape(n_paths, SLOTS, n_hyp)
-        seen = np.bitwise_or.accumulate(pack_bits(miss), axis=1)  # (c, SLOTS, W)
-        for i in range(SLOTS):
-            c, h = np.nonzero(miss[:, i])
-            rows[c, h] |= seen[c, i]
-        if self.hit.sum(axis=1).max(initial=0) <= _FEW_HITS:  # few: every pair one by one
-            return rows | self._all_pairs(owner)
-        # arcs clear of the cut at the heading overlap iff their intervals do
-        clear = (self.u - self.a >= _ANGLE_BAND) & (self.u + self.a <= 2 * math.pi - _ANGLE_BAND)
-        clear &= self.hit & np.isfinite(self.d)
-        d_low, d_high, u_low, u_high = (
-            self.d - self.r,
-            self.d + self.r,
-            self.u - self.a,
-            self.u + self.a,
-        )
-        # near a tie: another slot's interval starts within rounding (distances) or
-        # within the cosine slack (angles) of this one's end
-        band = 1e-13 * posed.scale
-        on_path = clear & (self.off == 0)
-        regular = on_path & ~close_ends(d_low, d_high, on_path, -band, band)
-        regular &= ~close_ends(u_low, u_high, on_path, -1e-12, _ANGLE_BAND)
-        # each slot's regular items, by interval ends (distance, angle)
-        lists = [
-            [
-                IntervalUnions.of(low[:, at], high[:, at], owners[:, at], regular[:, at], width)
-                for low, high in ((d_low, d_high), (u_low, u_high))
-            ]
-            for at in (slice(j * n_hyp, (j + 1) * n_hyp) for j in range(SLOTS))
-        ]
-        # regular slot i of h against the regular slots j <= i: intervals and arcs overlap
-        for i in range(SLOTS):
-            c, k = np.nonzero(regular & (slot == i))
-            for j in range(i + 1):
-                rows[c, owner[k]] |= self._overlaps(lists[j], c, k, 0.0, 0.0)
-        # near ties and near misses against the regular slots: sure matches from
-        # shrunk intervals, and the others of grown intervals confirmed one by one
-        near = clear & ~regular
-        c, k = np.nonzero(near)
-        if len(c):
-            r_min = float(self.r[self.hit].min(initial=0.0))
-            # off the path by x: |p - q|^2 = dd^2 + x^2 <= R^2 holds once |dd| <= R - x^2 / R
-            shrink = np.where(self.off[c, k] > 0, self.off[c, k] ** 2 / (self.r[c, k] + r_min), 0.0)
-            found = np.zeros((len(c), width), dtype=np.uint64)
-            for j in range(SLOTS):
-                sure = self._overlaps(lists[j], c, k, -shrink - 2 * band, -1e-12)
-                maybe = self._overlaps(lists[j], c, k, 2 * band, _ANGLE_BAND) & ~sure
-                found |= sure | self._confirm(c, k, maybe, j)
-            np.bitwise_or.at(rows, (c, owner[k]), found)
-        # arcs across the heading against every hit; near ones against each other
-        crossing = self.hit & ~clear
-        for queries, targets in ((crossing, self.hit), (near, near | crossing)):
-            c, k = np.nonzero(queries)
-            if len(c):
-                found = self._exact(c, k, targets, owner, chunk_elements)
-                np.bitwise_or.at(rows, (c, owner[k]), found)
-        return rows
-
-    def _overlaps(
-        self, lists: list, c: np.ndarray, k: np.ndarray, grow_d: Any, grow_u: Any
-    ) -> np.ndarray:
-        """(E, W) owners of the list's slots whose interval and arc overlap those of
-        item (c, k), its half-widths grown by `grow_d` and `grow_u`."""
-        d, r, u, a = self.d[c, k], self.r[c, k] + grow_d, self.u[c, k], self.a[c, k] + grow_u
-        return lists[0].overlapping(c, d - r, d + r) & lists[1].overlapping(c, u - a, u + a)
-
-    def _confirm(self, c: np.ndarray, k: np.ndarray, maybe: np.ndarray, j: int) -> np.ndarray:
-        """(E, W): the owners g in `maybe` whose slot j `_match`es item (c, k)."""
-        n_hyp = self.hit.shape[1] // SLOTS
-        e, g = np.nonzero(unpack_bits(maybe, n_hyp))
-        ok = np.zeros((len(c), n_hyp), dtype=bool)
-        if len(e):
-            hit = _match(self._slots_at(c[e], k[e]), self._slots_at(c[e], j * n_hyp + g))
-            ok[e[hit], g[hit]] = True
-        return pack_bits(ok)
-
-    def _all_pairs(self, owner: np.ndarray) -> np.ndarray:
-        """(c, H, W): for each pair of hit slots of a path, each pair once (the
-        transpose completes it), the owner of the second in the first's row."""
-        n_paths, n_hyp = len(self.hit), len(owner) // SLOTS
-        at = compact(self.hit)
-        path = np.arange(n_paths)[:, None]
-        first, second = np.triu_indices(at.shape[1])
-        ok = (at[:, first] >= 0) & (at[:, second] >= 0)
-        columns = self._slots_at(path, np.maximum(at, 0))
-        mine = _Slots(*(getattr(columns, f.name)[:, first] for f in fields(_Slots)))
-        theirs = _Slots(*(getattr(columns, f.name)[:, second] for f in fields(_Slots)))
-        c, p = np.nonzero(_match(mine, theirs) & ok)
-        pairs = np.zeros((n_paths, n_hyp, n_hyp), dtype=bool)
-        pairs[c, owner[at[c, first[p]]], owner[at[c, second[p]]]] = True
-        return pack_bits(pairs)
-
-    def _exact(
-        self, c: np.ndarray, k: np.ndarray, targets: np.ndarray, owner: np.ndarray, chunk: int
-    ) -> np.ndarray:
-        """(E, W) hypotheses one of whose `targets` slots (c, items) matches item (c, k)."""
-        n_hyp = len(owner) // SLOTS
-        at = compact(targets)
-        member = at >= 0
-        path = np.arange(len(targets))[:, None]
-        theirs = self._slots_at(path, np.maximum(at, 0))
-        out = np.zeros((len(c), n_words(n_hyp)), dtype=np.uint64)
-        # queries of paths with few targets first, each batch as wide as its widest path
-        size = member.sum(axis=1)[c]
-        by_size = np.argsort(size, kind="stable")
-        # batches of about `chunk` pairs
-        ends = np.searchsorted(np.cumsum(size[by_size]), np.arange(chunk, size.sum() + 1, chunk))
-        for lo, hi in zip(np.r_[0, ends], np.r_[ends, len(c)], strict=True):
-            if hi <= lo:
-                continue
-            pick = by_size[lo:hi]
-            width = max(1, int(size[pick[-1]]))
-            cc, kk = c[pick], k[pick]
-            mine = self._slots_at(cc[:, None], kk[:, None])
-            rows = _Slots(*(getattr(theirs, f.name)[cc, :width] for f in fields(_Slots)))
-            e, t = np.nonzero(_match(mine, rows) & member[cc, :width])
-            hits = np.zeros((len(cc), n_hyp), dtype=bool)
-            hits[e, owner[at[cc[e], t]]] = True
-            out[pick] = pack_bits(hits)
-        return out
-
-
-@dataclass(frozen=True, eq=False)
-class _Slots:
-    """Outcome slot fields prepared for matching: point (x, y), normal (cos, sin),
-    and each side's share of the tolerances (both sides' shares add up):
-    `reach` = eps_d + eps_t / 2 + grazing slack, `alpha` = phi + dtheta + cone
-    half-width, with its cosine and sine."""
-
-    valid: np.ndarray
-    hit: np.ndarray
-    x: np.ndarray
-    y: np.ndarray
-    cos: np.ndarray
-    sin: np.ndarray
-    reach: np.ndarray
-    alpha: np.ndarray
-    cos_alpha: np.ndarray
-    sin_alpha: np.ndarray
-
-    @classmethod
-    def of(cls, posed: PosedSet, o: Outcomes, sensor: SensorBounds) -> _Slots:
-        floor = 1e-9 * posed.scale
-        # points within 2 eps_d + (eps_t(h) + eps_t(g)) / 2: each side brings its half
-        reach = sensor.position_error + posed.eps_t[None, :, None] / 2 + o.slot_slack + floor / 2
-        # normals within 2 phi + dtheta(h) + dtheta(g): likewise, plus the vertex cones
-        alpha = sensor.normal_error + posed.rotation[None, :, None] + o.slot_spread + 0.5e-9
-        return cls(
-            o.slot_valid,
-            o.slot_hit,
-            o.slot_point[..., 0],
-            o.slot_point[..., 1],
-            np.cos(o.slot_angle),
-            np.sin(o.slot_angle),
-            reach,
-            alpha,
-            np.cos(alpha),
-            np.sin(alpha),
-        )
-
-
-def _match(a: _Slots, b: _Slots) -> np.ndarray:
-    """Two outcome slots match: both miss, or both hit within the point and normal tolerances."""
-    dx, dy = a.x - b.x, a.y - b.y
-    reach = a.reach + b.reach
-    # angle(n, m) <= alpha_a + alpha_b  <=>  cos(n, m) >= cos(alpha_a + alpha_b), or the
-    # sum reaches pi; the 1e-12 absorbs rounding (equal normals match at zero tolerance)
-    cos_turn = a.cos * b.cos + a.sin * b.sin
-    cos_limit = a.cos_alpha * b.cos_alpha - a.sin_alpha * b.sin_alpha
-    with np.errstate(invalid="ignore"):
-        aligned = (cos_turn >= cos_limit - 1e-12) | (a.alpha + b.alpha >= np.pi)
-        near = (dx * dx + dy * dy <= reach * reach) & aligned
-    both_hit = a.hit & b.hit & near
-    return a.valid & b.valid & ((~a.hit & ~b.hit) | both_hit)
+    return y | transpose_bits(y, n_cls) | misses
 
 
 def survivor_table(posed: PosedSet, confusable: np.ndarray) -> SurvivorTable:

@@ -306,7 +306,10 @@ def _outcome_chunk(
     # outcome slots
     nan = np.full(hit.shape, np.nan)
     angle0 = np.arctan2(ny, nx)
-    v_centre, v_spread = _angle_cone(nx, ny, adj_x, adj_y)
+    # the cone between the faces meeting at the vertex, for vertex hits only
+    v_centre, v_spread = np.zeros(hit.shape), np.zeros(hit.shape)
+    at = np.nonzero(vertex)
+    v_centre[at], v_spread[at] = _angle_cone(nx[at], ny[at], adj_x[at], adj_y[at])
     zero = np.zeros_like(angle0)
     slack = np.where(hit, along - geometric, 0.0)
     hit_x, hit_y = np.where(hit, px, nan), np.where(hit, py, nan)

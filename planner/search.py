@@ -24,6 +24,11 @@ prunes the paths at every node (branch and bound), and values are memoized on
 (state bitset, depth); values known to be exact (depth >= classes - 1, or no
 depth limit) are shared between depths. Without a depth limit the search is
 the exact dynamic programme over survivor sets (`optimal`).
+
+Two touches deep (the default lookahead) the root paths' children are valued
+one touch deep in large batches instead: the children of paths whose values
+lie close together are nearly all needed anyway. One-touch values take the
+minimum over the paths no other path dominates (:func:`undominated`).
 """
 
 from __future__ import annotations
@@ -31,19 +36,22 @@ from __future__ import annotations
 import bisect
 import time
 from dataclasses import dataclass
+from functools import cached_property
 from typing import Any
 
 import numpy as np
 
-from planner.bitsets import pack_bits, popcount, unpack_bits
+from planner.bitsets import inseparable_neighbours, pack_bits, popcount, undominated, unpack_bits
 from planner.outcomes import SurvivorTable
 
 __all__ = ["Deadline", "SearchResult", "expected_remaining", "state_value"]
 
 #: Children of one path evaluated together one touch deep, and the most words
-#: (paths x members x words) one batch of them may take.
+#: (paths x members x words) one batch of them may take; children of root paths
+#: valued together when the search is two touches deep.
 _BATCH = 64
 _BATCH_ELEMENTS = 2_000_000
+_GROUP = 256
 
 
 class _OutOfTimeError(Exception):
@@ -104,13 +112,29 @@ class _Search:
         self.separable = ~unpack_bits(table.inseparable, self.n)
         self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
         self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
-        self.near, self.near_apart = _neighbourhoods(~self.separable)
+        self.near, self.near_apart = inseparable_neighbours(~self.separable)
         self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
         self.one_word = self.bits.shape[-1] == 1
         self.deadline = deadline
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
         self.states = 0
+
+    @cached_property
+    def leaf(self) -> np.ndarray:
+        """The paths one touch deep values need: no other path dominates them.
+
+        If S_Q(h) is within S_Q'(h) for every h, then in any state T every member
+        Q' leaves settled Q does too and every member Q leaves with T Q' does too;
+        (1 + o) / (1 - s) grows with s and with o + s, so Q's one-touch bound
+        ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above Q''s. (Deeper
+        values need not follow: E is not monotone in the set.)"""
+        return undominated(self.bits)
+
+    @cached_property
+    def leaf_by_class(self) -> np.ndarray:
+        """(K, leaf paths, W): `by_class` on the `leaf` paths."""
+        return np.ascontiguousarray(self.by_class[:, self.leaf])
 
     def settled(self, state: np.ndarray, idx: np.ndarray) -> bool:
         """Can no path split the set `state` (W,) of the classes `idx`?"""
@@ -119,6 +143,15 @@ class _Search:
         if not self.any_inseparable or np.any(state & self.apart[idx[0]] != 0):
             return False
         return bool(self._clique(state[None], idx[:1])[0])
+
+    def _cliques(self, group: np.ndarray, idx: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """`_clique` of the groups (..., W) of classes idx (...) of `size` (...) two or
+        more; False for the others (a group of one is settled anyway)."""
+        out = np.zeros(idx.shape, dtype=bool)
+        pick = np.nonzero(size >= 2)
+        if len(pick[0]):
+            out[pick] = self._clique(group[pick], idx[pick])
+        return out
 
     def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
@@ -165,7 +198,7 @@ class _Search:
                 # when it holds no more (as many members) and those are pairwise inseparable
                 group = self.inseparable[idx] & state
                 size = popcount(group)
-                settled |= (count == size) & self._clique(group, idx)
+                settled |= (count == size) & self._cliques(group, idx, size)
             open_ = ~stay & ~settled
         w_stay = stay.astype(float) @ w
         informative = w_stay < 1 - 1e-12
@@ -191,11 +224,12 @@ class _Search:
             return 0.0
         if depth == 0:
             return 1.0  # admissible leaf bound: S can be split, so at least one touch
-        node = self.expand(state, idx)
         if depth == 1:
-            best = float(node.bound.min())  # children are leaves worth 0 or 1: exact
+            # children are leaves worth 0 or 1: exact
+            best = float(self.expand(state, idx, self.leaf).bound.min())
         else:
             # E(S) = 1 + min_P sum_h w(h|S) E(S_P(h) & S), paths in order of their bound
+            node = self.expand(state, idx)
             best = np.inf
             child_depth = None if depth is None else depth - 1
             for c in np.argsort(node.bound, kind="stable"):
@@ -240,27 +274,28 @@ class _Search:
         bound min_P (1 + w(open | T)) / (1 - w(stay | T)), or 0 if T is settled."""
         self.deadline.check()
         out = np.empty(len(sets))
-        missing = []
+        missing: dict[bytes, list[int]] = {}  # each set not known yet, once
         for i, state in enumerate(sets):
             key = state.tobytes()
             known = self.exact.get(key, self.limited.get((key, 1)))
             if known is None:
-                missing.append(i)
+                missing.setdefault(key, []).append(i)
             else:
                 out[i] = known
         if missing:
-            todo = sets[missing]
+            todo = sets[[where[0] for where in missing.values()]]
             found = np.empty(len(todo))
             size = popcount(todo)
             # similar sizes together, each batch padded to its largest set and kept
             # within _BATCH_ELEMENTS words
             order = np.argsort(size, kind="stable")
-            budget = max(1, _BATCH_ELEMENTS // (self.bits.shape[0] * self.bits.shape[-1]))
+            budget = max(1, _BATCH_ELEMENTS // (len(self.leaf) * self.bits.shape[-1]))
             lo = 0
             while lo < len(order):
                 hi = lo + 1
                 while hi < len(order) and (hi + 1 - lo) * size[order[hi]] <= budget:
                     hi += 1
+                self.deadline.check()
                 pick = order[lo:hi]
                 m = int(size[pick].max())
                 # members of each set, padded with -1 (one row per set)
@@ -269,7 +304,8 @@ class _Search:
                 settled = self._settled_many(todo[pick], idx)
                 found[pick] = np.where(settled, 0.0, self._bound_one(todo[pick], idx))
                 lo = hi
-            out[missing] = found
+            for where, v in zip(missing.values(), found, strict=True):
+                out[where] = v
             for state, v, m in zip(todo, found, size, strict=True):
                 # one touch deep is the exact value for sets of at most two classes
                 if v == 0.0 or m <= 2:
@@ -284,8 +320,8 @@ class _Search:
         if not self.any_inseparable:
             return single
         first = np.maximum(idx[:, 0], 0)
-        inside = ~np.any(sets & self.apart[first] != 0, axis=-1)
-        return single | (inside & self._clique(sets, first))
+        inside = ~np.any(sets & self.apart[first] != 0, axis=-1) & ~single
+        return single | self._cliques(sets, first, np.where(inside, 2, 0))
 
     def _bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """(n,) min over paths of the one-touch bound of each set T (n, W) with
@@ -297,14 +333,23 @@ class _Search:
         total = w.sum(axis=1, keepdims=True)
         # w(h|T), uniform when T weighs nothing
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
-        # |S_P(h) & T| for every member h and path P: (n, M, C)
-        count = popcount(self.by_class[g] & sets[:, None, None, :])
+        # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
+        rows = self.leaf_by_class[g]
+        count = popcount(np.bitwise_and(rows, sets[:, None, None, :], out=rows))
         stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
         settled = count <= 1
         if self.any_inseparable:
+            # (a group of one is settled by the count already)
             group = self.inseparable[g] & sets[:, None, :]
-            clique = self._clique(group.reshape(-1, group.shape[-1]), g.reshape(-1))
-            settled |= (count == popcount(group)[..., None]) & clique.reshape(g.shape)[..., None]
+            size = popcount(group)
+            pick = np.nonzero(size >= 2)
+            if len(pick[0]):
+                # some path leaves h with exactly its group: settled if that is a clique
+                only = count[pick] == size[pick][:, None]
+                some = np.flatnonzero(only.any(axis=1))
+                clique = self._clique(group[pick][some], g[pick][some])
+                at = (pick[0][some], pick[1][some])
+                settled[at] |= only[some] & clique[:, None]
         open_ = ~stay & ~settled & real[..., None]
         w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
         w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
@@ -340,6 +385,9 @@ class _Search:
         child_depth = None if depth is None else depth - 1
         live = paths[np.isfinite(node.bound[paths])]
         order = live[np.argsort(node.bound[live] + extra[live], kind="stable")]
+        if child_depth == 1:
+            truncated = self._rank_two(node, order, top_k, extra, value, exact)
+            return SearchResult(value, exact, truncated, self.states)
         best: list[float] = []  # sorted exact objectives found so far
         truncated = False
         for c in order:
@@ -357,22 +405,47 @@ class _Search:
                 bisect.insort(best, v + extra[c])
         return SearchResult(value, exact, truncated, self.states)
 
-
-def _neighbourhoods(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
-    G-bit masks over that list, which of them are separable from each (K, G);
-    (None, None) when some class has more than 64 inseparable classes."""
-    size = together.sum(axis=1)
-    width = int(size.max(initial=1))
-    if width > 64:
-        return None, None
-    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
-    ok = np.take_along_axis(together, order, axis=1)
-    near = np.where(ok, order, -1)
-    at = np.maximum(near, 0)
-    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
-    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
-    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)
+    def _rank_two(
+        self,
+        node: _Node,
+        order: np.ndarray,
+        top_k: int | None,
+        extra: np.ndarray,
+        value: np.ndarray,
+        exact: np.ndarray,
+    ) -> bool:
+        """Root paths two touches deep, in `order`, a group at a time: all children
+        of a group are valued one touch deep together. (Branch and bound would value
+        nearly all of them anyway: counting one touch per child the bounds of paths
+        with close values prune little.) Stops at the first path whose bound reaches
+        the top_k-th exact objective; fills `value` and `exact` of the paths done and
+        returns whether the deadline stopped it."""
+        best: list[float] = []  # sorted exact objectives found so far
+        lo = 0
+        while lo < len(order):
+            threshold = best[top_k - 1] if top_k is not None and len(best) >= top_k else np.inf
+            hi, children = lo, 0
+            while hi < len(order) and (hi == lo or children < _GROUP):
+                if node.bound[order[hi]] + extra[order[hi]] >= threshold:
+                    break
+                children += int(node.open[order[hi]].sum())
+                hi += 1
+            if hi == lo:
+                return False
+            group = order[lo:hi]
+            at, k = np.nonzero(node.open[group])
+            try:
+                values = self.values_one(node.child[group[at], k])
+            except _OutOfTimeError:
+                return True
+            # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
+            total = 1.0 + np.bincount(at, weights=node.weight[k] * values, minlength=len(group))
+            value[group] = total / (1.0 - node.w_stay[group])
+            exact[group] = True
+            for v in value[group] + extra[group]:
+                bisect.insort(best, float(v))
+            lo = hi
+        return False
 
 
 def _batches(n: int, first: int) -> list[tuple[int, int]]:

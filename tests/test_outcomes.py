@@ -16,6 +16,7 @@ import shapely
 from hypothesis import event, given, settings
 from hypothesis import strategies as st
 
+from planner import matching
 from planner.bitsets import (
     IntervalUnions,
     close_ends,
@@ -27,13 +28,13 @@ from planner.bitsets import (
     weighted_count,
 )
 from planner.geometry import make_stable_pose, wrap_angle
+from planner.matching import SLOTS, Slots, slots_match
 from planner.outcomes import (
     CandidateConfig,
     Candidates,
     OutcomeConfig,
+    Outcomes,
     SurvivorTable,
-    _match,
-    _Slots,
     class_survivors,
     confusability,
     contains_points,
@@ -323,12 +324,12 @@ def class_scenes(draw):
 
 
 def dense_confusability(posed, out, sensor):
-    """Every outcome slot of h against every slot of g, pair by pair (`_match`)."""
-    slots = _Slots.of(posed, out, sensor)
-    columns = [getattr(slots, f.name) for f in dataclasses.fields(_Slots)]
-    mine = _Slots(*(col[:, :, None, :, None] for col in columns))
-    theirs = _Slots(*(col[:, None, :, None, :] for col in columns))
-    return _match(mine, theirs).any(axis=(-1, -2)) | (posed.cls[:, None] == posed.cls[None, :])
+    """Every outcome slot of h against every slot of g, pair by pair (`slots_match`)."""
+    slots = Slots.of(posed, out, sensor)
+    columns = [getattr(slots, f.name) for f in dataclasses.fields(Slots)]
+    mine = Slots(*(col[:, :, None, :, None] for col in columns))
+    theirs = Slots(*(col[:, None, :, None, :] for col in columns))
+    return slots_match(mine, theirs).any(axis=(-1, -2)) | (posed.cls[:, None] == posed.cls[None, :])
 
 
 @settings(max_examples=60, deadline=None)
@@ -346,6 +347,89 @@ def test_ties_and_classes_agree_with_the_pairwise_test(scene):
     np.testing.assert_array_equal(
         class_survivors(posed, out, sensor).bits, survivor_table(posed, conf).bits
     )
+
+
+@st.composite
+def slot_scenes(draw):
+    """Made-up outcome slots on a few paths: points on the path (near misses' closest
+    approach off it, slot 1 only) at coarse distances and angles (many exact ties and
+    touching tolerances), vertex cones up to most of a half turn, some reaching
+    across the path's heading."""
+    n_hyp, n_paths = draw(st.integers(2, 40)), draw(st.integers(1, 4))
+    rng = np.random.default_rng(draw(st.integers(0, 2**31)))
+    hyps = [
+        hyp(
+            "square",
+            0.0,
+            0.0,
+            cls=int(rng.integers(0, max(1, n_hyp // 2))),
+            eps_t=float(rng.choice([0.0, 1.0, 2.0])),
+            rotation=float(rng.choice([0.0, 0.05, 0.25])),
+        )
+        for _ in range(n_hyp)
+    ]
+    sensor = SensorBounds(float(rng.choice([0.0, 0.5])), float(rng.choice([0.0, 0.05])))
+    shape = (n_paths, n_hyp, SLOTS)
+    heading = rng.uniform(-math.pi, math.pi, n_paths)
+    valid = rng.random(shape) < 0.8
+    valid[..., 0] = True
+    hit = valid & (rng.random(shape) < 0.85)
+    distance = np.where(hit, rng.integers(0, 12, shape) / 2.0, np.nan)
+    offset = np.zeros(shape)
+    offset[..., 1] = np.where(rng.random(shape[:2]) < 0.3, rng.integers(-4, 5, shape[:2]) / 4, 0)
+    offset = np.where(hit, offset, 0.0)
+    # normals facing back along the path, or anywhere
+    back = heading[:, None, None] + math.pi + rng.integers(-6, 7, shape) * math.pi / 12
+    angle = np.where(rng.random(shape) < 0.8, back, rng.integers(-12, 12, shape) * math.pi / 12)
+    spread = np.where(rng.random(shape) < 0.3, rng.integers(0, 11, shape) * math.pi / 24, 0.0)
+    slack = np.where(rng.random(shape) < 0.2, rng.integers(0, 3, shape) / 2, 0.0)
+    d = np.stack([np.cos(heading), np.sin(heading)], axis=-1)[:, None, None, :]
+    left = np.stack([-d[..., 1], d[..., 0]], axis=-1)
+    origin = rng.uniform(-5, 5, (n_paths, 1, 1, 2))
+    point = origin + distance[..., None] * d + offset[..., None] * left
+    return hyps, sensor, heading, valid, hit, point, angle, spread, slack, distance, offset
+
+
+@settings(max_examples=120, deadline=None)
+@given(slot_scenes(), st.booleans())
+def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
+    # with many hit slots on a path its relation comes from sorted interval ends;
+    # `every_path` sends paths with few hits that way too
+    hyps, sensor, heading, valid, hit, point, angle, spread, slack, distance, offset = scene
+    posed = pose_hypotheses(hyps, MODELS)
+    nominal = point[:, :, 0]
+    out = Outcomes(
+        hit=hit[..., 0],
+        distance=np.where(hit[..., 0], distance[..., 0], np.inf),
+        point=nominal,
+        normal=np.stack([np.cos(angle[..., 0]), np.sin(angle[..., 0])], axis=-1),
+        face=np.where(hit[..., 0], 0, -1),
+        travel=np.zeros(hit.shape[:2]),
+        vertex=valid[..., 1] & hit[..., 1],
+        grazing=np.zeros(hit.shape[:2], dtype=bool),
+        near_miss=np.zeros(hit.shape[:2], dtype=bool),
+        end_of_path=np.zeros(hit.shape[:2], dtype=bool),
+        slot_valid=valid,
+        slot_hit=hit,
+        slot_point=point,
+        slot_angle=angle,
+        slot_spread=spread,
+        slot_slack=slack,
+        slot_distance=distance,
+        slot_offset=offset,
+        heading=heading,
+    )
+    slots = Slots.of(posed, out, sensor)
+    u = np.mod(angle - heading[:, None, None], 2 * math.pi)
+    if (hit & ((u - slots.alpha < 0) | (u + slots.alpha > 2 * math.pi))).any():
+        event("an arc across the heading")
+    with pytest.MonkeyPatch.context() as patch:
+        if every_path:
+            patch.setattr(matching, "_FEW_HITS", 0)
+        conf = confusability(posed, out, sensor)
+        table = class_survivors(posed, out, sensor)
+    np.testing.assert_array_equal(conf, dense_confusability(posed, out, sensor))
+    np.testing.assert_array_equal(table.bits, survivor_table(posed, conf).bits)
 
 
 def test_chunking_does_not_change_outcomes():

@@ -15,6 +15,7 @@ import shapely
 from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
+from planner.bitsets import undominated
 from planner.geometry import make_stable_pose
 from planner.outcomes import (
     SurvivorTable,
@@ -226,11 +227,12 @@ def test_inseparable_classes_end_the_search():
     assert state_value(table, None, state=np.array([False, True, True])) == 0.0
 
 
-def test_deadline_stops_the_search():
+@pytest.mark.parametrize("depth", [None, 2])
+def test_deadline_stops_the_search(depth):
     rng = np.random.default_rng(0)
     conf = rng.random((30, 12, 12)) < 0.4
     table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(12))
-    result = expected_remaining(table, None, deadline=Deadline(end=0.0))
+    result = expected_remaining(table, depth, deadline=Deadline(end=0.0))
     assert result.truncated
     assert not result.exact[np.isfinite(result.value)].any()
     with pytest.raises(TimeoutError):
@@ -407,3 +409,25 @@ def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
         found = expected_remaining(table, depth)
         np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
         assert found.exact.all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 10), st.integers(1, 4), st.integers(0, 2**31))
+def test_dominated_paths_leave_the_lookahead_unchanged(k, n_paths, seed):
+    # copies of paths, and copies that confuse more: the one-touch leaves use only
+    # the paths nothing dominates, the values stay those of the plain recursion
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.6)
+    conf = conf | conf.transpose(0, 2, 1)
+    worse = conf[rng.integers(0, n_paths, 3)] | (rng.random((3, k, k)) < 0.2)
+    same = conf[rng.integers(0, n_paths, 2)]
+    paths = np.concatenate([worse | worse.transpose(0, 2, 1), conf, same])
+    table = SurvivorTable.from_matrix(paths[rng.permutation(len(paths))], rng.uniform(0.1, 1, k))
+    kept = undominated(table.bits)
+    assert len(kept) <= n_paths
+    matrix = table.matrix()
+    for q in range(len(paths)):  # every path is within reach of a kept one
+        assert any((matrix[p] <= matrix[q]).all() for p in kept)
+    for depth in (1, 2, 3):
+        found = expected_remaining(table, depth)
+        np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
