@@ -88,13 +88,19 @@ class Outcomes:
     Uncertainty flags (C, H): `vertex` (hit within tolerance of a vertex),
     `grazing` (path nearly parallel to the face hit), `near_miss` (a miss that
     passes within tolerance of the outline), `end_of_path` (hit within tolerance
-    of the path's end: it may be a miss).
+    of the path's end: it may be a miss), `shallow` (the path cuts so little of the
+    outline that the true one, within tolerance, may let it pass: it may be a
+    miss), `close_pass` (before its hit the path passes within the vertex zone of
+    another vertex: it may be met there first), `stretch` (past the hit the path
+    stays shallow for long, through a thin feature: the contact may come anywhere
+    along it, on any face; slot 0 then spans that stretch with any normal).
 
     Outcome slots (C, H, 3) list everything the outcome could turn out to be:
     slot 0 the nominal outcome, slot 1 a hit near the nominal point (or near the
-    closest approach of a near miss) whose normal may lie anywhere in the cone
-    `slot_angle +- slot_spread` between the faces meeting at the vertex, slot 2
-    the path slipping past the contact (the next hit further on, or a miss).
+    closest approach of a near miss or of a close pass) whose normal may lie
+    anywhere in the cone `slot_angle +- slot_spread` between the faces meeting at
+    the vertex, slot 2 the path slipping past the contact (the next hit further on,
+    or a miss; a vertex hit's close pass takes it when it is free).
     `slot_slack` widens the point tolerance of grazing hits, whose contact
     slides along the path by `tolerance / |cos(incidence)|`. `slot_distance`
     is how far along the path a slot's point lies (NaN for a miss) and
@@ -112,6 +118,9 @@ class Outcomes:
     grazing: np.ndarray
     near_miss: np.ndarray
     end_of_path: np.ndarray
+    shallow: np.ndarray
+    close_pass: np.ndarray
+    stretch: np.ndarray
     slot_valid: np.ndarray
     slot_hit: np.ndarray
     slot_point: np.ndarray
@@ -132,7 +141,15 @@ class Outcomes:
     @property
     def uncertain(self) -> np.ndarray:
         """(C, H) bool: the outcome may be something other than the nominal one."""
-        return self.vertex | self.grazing | self.near_miss | self.end_of_path
+        return (
+            self.vertex
+            | self.grazing
+            | self.near_miss
+            | self.end_of_path
+            | self.shallow
+            | self.close_pass
+            | self.stretch
+        )
 
 
 def _tolerances(posed: PosedSet, sensor: SensorBounds, config: OutcomeConfig) -> dict:

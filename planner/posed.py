@@ -293,15 +293,30 @@ def _outcome_chunk(
     along = geometric / np.maximum(cos_in, graze_sin)
     end_of_path = hit & (dist > length - along)
     facing_away = dx * adj_x + dy * adj_y > -graze_sin
-    slip = (vertex & facing_away) | grazing | end_of_path
+    shallow = _shallow(fc, t, dist, hit, f, rows, dx, dy, cos_in, length)
+    stretch = _stretch(fc, origins, t, dist, hit, vertex, face_len, rows, dx, dy)
+    # a contact may come anywhere along a long shallow stretch, on any face near it
+    long_stretch = stretch > 2 * along
+    slip = (vertex & facing_away) | grazing | end_of_path | shallow
     slip_hit, slip_dist, slip_angle = _slip(fc, t, slip, end_of_path, px, py, dx, dy)
     near_miss, near_x, near_y, m_centre, m_spread = _near_miss(
         fc, origins, directions, lengths, hit
     )
 
-    # a near miss's closest approach: how far along the path, and how far off it
+    close_pass, pass_x, pass_y, p_centre, p_spread = _close_pass(fc, origins, hit, f, rows, px, py)
+    # a vertex hit keeps slot 1 for its own vertex: its close pass goes to a free slot 2
+    in_slot1 = close_pass & ~vertex
+    in_slot2 = close_pass & vertex & ~slip
+    near_miss_or_pass = near_miss | in_slot1
+    near_x, near_y = np.where(in_slot1, pass_x, near_x), np.where(in_slot1, pass_y, near_y)
+    m_centre = np.where(in_slot1, p_centre, m_centre)
+    m_spread = np.where(in_slot1, p_spread, m_spread)
+
+    # a near miss's (or close pass's) closest approach: how far along the path, how far off
     rel_x, rel_y = near_x - origins[:, 0, None], near_y - origins[:, 1, None]
     along_near, off_near = rel_x * dx + rel_y * dy, dx * rel_y - dy * rel_x
+    pass_rx, pass_ry = pass_x - origins[:, 0, None], pass_y - origins[:, 1, None]
+    along_pass, off_pass = pass_rx * dx + pass_ry * dy, dx * pass_ry - dy * pass_rx
 
     # outcome slots
     nan = np.full(hit.shape, np.nan)
@@ -313,10 +328,16 @@ def _outcome_chunk(
     zero = np.zeros_like(angle0)
     slack = np.where(hit, along - geometric, 0.0)
     hit_x, hit_y = np.where(hit, px, nan), np.where(hit, py, nan)
+    mid = np.where(long_stretch, stretch / 2, 0.0)  # slot 0 spans the stretch
+    nominal_x, nominal_y = hit_x + mid * dx, hit_y + mid * dy
+    nominal_slack = slack + mid
+    nominal_spread = np.where(long_stretch, math.pi, 0.0)
     slip_x = np.where(slip_hit, origins[:, 0, None] + slip_dist * dx, nan)
     slip_y = np.where(slip_hit, origins[:, 1, None] + slip_dist * dy, nan)
-    slot_x = np.stack([hit_x, np.where(vertex, px, near_x), slip_x], axis=-1)
-    slot_y = np.stack([hit_y, np.where(vertex, py, near_y), slip_y], axis=-1)
+    slip_x, slip_y = np.where(in_slot2, pass_x, slip_x), np.where(in_slot2, pass_y, slip_y)
+    slot_x = np.stack([nominal_x, np.where(vertex, px, near_x), slip_x], axis=-1)
+    slot_y = np.stack([nominal_y, np.where(vertex, py, near_y), slip_y], axis=-1)
+    slot2 = slip | in_slot2
     return {
         "hit": hit,
         "distance": dist,
@@ -328,26 +349,158 @@ def _outcome_chunk(
         "grazing": grazing,
         "near_miss": near_miss,
         "end_of_path": end_of_path,
-        "slot_valid": np.stack([np.ones_like(hit), vertex | near_miss, slip], axis=-1),
-        "slot_hit": np.stack([hit, vertex | near_miss, slip_hit], axis=-1),
+        "shallow": shallow,
+        "close_pass": close_pass,
+        "stretch": long_stretch,
+        "slot_valid": np.stack([np.ones_like(hit), vertex | near_miss_or_pass, slot2], axis=-1),
+        "slot_hit": np.stack([hit, vertex | near_miss_or_pass, slip_hit | in_slot2], axis=-1),
         "slot_point": np.stack([slot_x, slot_y], axis=-1),
         "slot_angle": np.stack(
-            [angle0, np.where(vertex, v_centre, m_centre), np.where(slip, slip_angle, 0.0)],
-            axis=-1,
-        ),
-        "slot_spread": np.stack([zero, np.where(vertex, v_spread, m_spread), zero], axis=-1),
-        "slot_slack": np.stack([slack, np.where(vertex, slack, 0.0), zero], axis=-1),
-        "slot_distance": np.stack(
             [
-                np.where(hit, dist, nan),
-                np.where(vertex, dist, along_near),
-                np.where(slip_hit, slip_dist, nan),
+                angle0,
+                np.where(vertex, v_centre, m_centre),
+                np.where(in_slot2, p_centre, np.where(slip, slip_angle, 0.0)),
             ],
             axis=-1,
         ),
-        "slot_offset": np.stack([zero, np.where(vertex, 0.0, off_near), zero], axis=-1),
+        "slot_spread": np.stack(
+            [
+                nominal_spread,
+                np.where(vertex, v_spread, m_spread),
+                np.where(in_slot2, p_spread, zero),
+            ],
+            axis=-1,
+        ),
+        "slot_slack": np.stack([nominal_slack, np.where(vertex, slack, 0.0), zero], axis=-1),
+        "slot_distance": np.stack(
+            [
+                np.where(hit, dist + mid, nan),
+                np.where(vertex, dist, along_near),
+                np.where(in_slot2, along_pass, np.where(slip_hit, slip_dist, nan)),
+            ],
+            axis=-1,
+        ),
+        "slot_offset": np.stack(
+            [zero, np.where(vertex, 0.0, off_near), np.where(in_slot2, off_pass, zero)],
+            axis=-1,
+        ),
         "heading": np.arctan2(directions[:, 1], directions[:, 0]),
     }
+
+
+def _shallow(
+    fc: _Faces,
+    t: np.ndarray,
+    dist: np.ndarray,
+    hit: np.ndarray,
+    f: np.ndarray,
+    rows: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    sin_in: np.ndarray,
+    length: np.ndarray,
+) -> np.ndarray:
+    """(c, H) bool: hits whose path cuts the outline no deeper than `geometric`.
+
+    The chord from the entry (`dist`) to the next crossing, of length L, meets
+    the entry face at sin(a) = `sin_in` and the exit face at sin(b). A point s
+    along it lies ``s sin(a)`` from the entry face's line and ``(L - s) sin(b)``
+    from the exit face's, so no point of the chord is deeper than
+    ``L sin(a) sin(b) / (sin(a) + sin(b))`` (other faces only make it shallower),
+    nor than L / 2. The recognition keeps a hypothesis after a miss unless the
+    path enters its outline shrunk by that tolerance, so a shallow hit may well be
+    a miss (or meet what lies beyond).
+    """
+    later = np.where(t > (dist + fc.margin)[..., None], t, np.inf)
+    exit_face = np.argmin(later, axis=-1)
+    t_exit = np.take_along_axis(later, exit_face[..., None], axis=-1)[..., 0]
+    chord = np.where(np.isfinite(t_exit), t_exit, length) - np.where(hit, dist, 0.0)
+    sin_out = np.abs(dx * fc.nx[rows, exit_face] + dy * fc.ny[rows, exit_face])
+    corner = chord * sin_in * sin_out / np.maximum(sin_in + sin_out, 1e-12)
+    depth = np.minimum(np.where(np.isfinite(t_exit), corner, chord), chord / 2)
+    return hit & (depth < fc.geometric)
+
+
+#: Samples along the path past a hit, half a vertex zone apart, looking for depth.
+_STRETCH_SAMPLES = 8
+
+
+def _stretch(
+    fc: _Faces,
+    origins: np.ndarray,
+    t: np.ndarray,
+    dist: np.ndarray,
+    hit: np.ndarray,
+    vertex: np.ndarray,
+    face_len: np.ndarray,
+    rows: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+) -> np.ndarray:
+    """(c, H): how far past the hit the path stays within `geometric` of the
+    outline, for hits on short faces (under four vertex zones) or near a vertex,
+    where thin features live; 0 elsewhere.
+
+    The recognition explains a contact anywhere the path has not yet entered the
+    outline shrunk by `geometric` (plus the position error): through a feature
+    thinner than twice that, the contact may come well past the nominal hit, on
+    another face. Points half a vertex zone apart are tested (inside the outline:
+    before the next crossing) until one lies deeper than `geometric`; the stretch
+    ends there, at most `_STRETCH_SAMPLES` steps on.
+    """
+    out = np.zeros(hit.shape)
+    c, h = np.nonzero(hit & (vertex | (face_len < 4 * fc.vertex_tol[rows])))
+    if not len(c):
+        return out
+    step = fc.vertex_tol[h] / 2
+    later = np.where(t[c, h] > (dist[c, h] + fc.margin)[:, None], t[c, h], np.inf)
+    t_exit = later.min(axis=-1)
+    k = np.arange(1, _STRETCH_SAMPLES + 1)
+    s = dist[c, h, None] + k * step[:, None]  # (n, M)
+    qx = origins[c, 0, None] + s * dx[c, 0, None]
+    qy = origins[c, 1, None] + s * dy[c, 0, None]
+    depth = segment_distance(
+        qx[..., None], qy[..., None], fc.sx[h, None], fc.sy[h, None], fc.ex[h, None], fc.ey[h, None]
+    )
+    depth = np.where(fc.valid[h, None], depth, np.inf).min(axis=-1)  # (n, M)
+    deep = (depth >= fc.geometric[h, None]) | (s >= t_exit[:, None])
+    first = np.where(deep.any(axis=1), np.argmax(deep, axis=1) + 1, _STRETCH_SAMPLES)
+    out[c, h] = np.minimum(first * step, t_exit - dist[c, h])
+    return out
+
+
+def _close_pass(
+    fc: _Faces,
+    origins: np.ndarray,
+    hit: np.ndarray,
+    f: np.ndarray,
+    rows: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """Hits whose path passes within the vertex zone (`geometric` plus the
+    position error: what the recognition allows a contact) of a vertex before
+    reaching the contact (a vertex other than the face hit's own, outside its
+    vertex zone): the true outline may be met there first. Returns (flag, the vertex's x and y,
+    centre and half-width of the normals there), each (c, H)."""
+    ox, oy = origins[:, 0, None, None], origins[:, 1, None, None]
+    gap = segment_distance(fc.sx, fc.sy, ox, oy, px[..., None], py[..., None])  # (c, H, F)
+    own = (np.arange(fc.sx.shape[1]) == f[..., None]) | (
+        np.arange(fc.sx.shape[1]) == fc.next[rows, f][..., None]
+    )
+    near_contact = np.hypot(fc.sx - px[..., None], fc.sy - py[..., None]) <= fc.vertex_tol[:, None]
+    gap = np.where(fc.valid & ~own & ~near_contact & hit[..., None], gap, np.inf)
+    k = np.argmin(gap, axis=-1)
+    flag = np.take_along_axis(gap, k[..., None], axis=-1)[..., 0] <= fc.vertex_tol
+    vx, vy = fc.sx[rows, k], fc.sy[rows, k]
+    before = fc.prev[rows, k]
+    centre, spread = np.zeros(hit.shape), np.zeros(hit.shape)
+    at = np.nonzero(flag)
+    centre[at], spread[at] = _angle_cone(
+        fc.nx[rows, before][at], fc.ny[rows, before][at], fc.nx[rows, k][at], fc.ny[rows, k][at]
+    )
+    nan = np.full(hit.shape, np.nan)
+    return flag, np.where(flag, vx, nan), np.where(flag, vy, nan), centre, spread
 
 
 def _slip(

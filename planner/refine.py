@@ -79,12 +79,7 @@ def refinement(
     before = posed.eps_t[reps]
     after = np.broadcast_to(before, (C, len(reps))).copy()
     rotation = np.broadcast_to(posed.rotation[reps], (C, len(reps))).copy()
-    sure = (
-        (outcomes.face[:, reps] >= 0)
-        & ~outcomes.vertex[:, reps]
-        & ~outcomes.grazing[:, reps]
-        & ~outcomes.end_of_path[:, reps]
-    )
+    sure = outcomes.hit[:, reps] & ~outcomes.uncertain[:, reps]
     if contacts and (eps_d > 0 or phi > 0) and sure.any():
         P0 = np.array([c.point for c in contacts], dtype=float)
         U0 = np.array([c.normal for c in contacts], dtype=float)

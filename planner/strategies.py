@@ -298,7 +298,7 @@ def pin_families(
     if not len(shared):
         return bits
     bits = bits.copy()
-    sure = outcomes.hit & ~outcomes.vertex & ~outcomes.grazing & ~outcomes.end_of_path  # (C, H)
+    sure = outcomes.hit & ~outcomes.uncertain  # (C, H)
     for f in shared:
         hs = np.flatnonzero(solo & (family == f))
         hit_n = outcomes.normal[:, hs]  # (C, S, 2)

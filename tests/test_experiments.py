@@ -62,6 +62,8 @@ def small_spec(**kw) -> ExperimentSpec:
         "seed": 3,
         "workspace": SMALL_WS,
         "max_touches": 6,
+        # no time budget: plans then do not depend on how loaded the machine is
+        "strategy": {"budget_ms": None},
     }
     return ExperimentSpec(**{**base, **kw})
 

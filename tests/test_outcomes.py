@@ -137,9 +137,32 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
                 best = (t, f)
         return best
 
+    def crossings(after):
+        """The first face crossing strictly beyond `after` along the path."""
+        best = (math.inf, -1)
+        for g in faces:
+            edge = e[g] - s[g]
+            denom = d[0] * edge[1] - d[1] * edge[0]
+            if abs(denom) <= 1e-12 * posed.length[h, g]:
+                continue
+            w = s[g] - o
+            tg = (w[0] * edge[1] - w[1] * edge[0]) / denom
+            u = (w[0] * d[1] - w[1] * d[0]) / denom
+            if after < tg <= length and 0 <= u <= 1 and tg < best[0]:
+                best = (tg, g)
+        return best
+
     t, f = hits()
     hit = f >= 0
-    flags = dict(vertex=False, grazing=False, near_miss=False, end_of_path=False)
+    flags = dict(
+        vertex=False,
+        grazing=False,
+        near_miss=False,
+        end_of_path=False,
+        shallow=False,
+        close_pass=False,
+        stretch=False,
+    )
     slots = [(True, hit, o + t * d if hit else None, 0.0, 0.0, 0.0)]
     if hit:
         p, normal = o + t * d, n[f]
@@ -151,13 +174,64 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
         flags["grazing"] = cos_in < graze
         along = geometric / max(cos_in, graze)
         flags["end_of_path"] = t > length - along
+        # shallow: the deepest point of the chord to the next crossing
+        t_exit, f_exit = crossings(t + 1e-9 * posed.scale)
+        chord = (t_exit if f_exit >= 0 else length) - t
+        depth = chord / 2
+        if f_exit >= 0:
+            a, b = cos_in, abs(float(d @ n[f_exit]))
+            corner = chord * a * b / max(a + b, 1e-12)
+            depth = min(depth, corner)
+        flags["shallow"] = depth < geometric
+        # close pass: a vertex other than the hit face's own within its zone of the way in
+        passes = [
+            (_seg_dist(s[k], o, p), k)
+            for k in faces
+            if k != f and k != posed.next[h, f] and math.hypot(*(s[k] - p)) > vertex_tol
+        ]
+        gap, k = min(passes, default=(math.inf, -1))
+        flags["close_pass"] = gap <= vertex_tol
+        # stretch: past a hit on a short face or near a vertex, how long the path stays
+        # within geometric of the outline
+        stretch = 0.0
+        if flags["vertex"] or posed.length[h, f] < 4 * vertex_tol:
+            step = vertex_tol / 2
+            end = t_exit if f_exit >= 0 else math.inf
+            stretch = min(8 * step, end - t)
+            for k in range(1, 9):
+                q = o + (t + k * step) * d
+                depth = min(_seg_dist(q, s[g], e[g]) for g in faces)
+                if depth >= geometric or t + k * step >= end:
+                    stretch = min(k * step, end - t)
+                    break
         slack = along - geometric
-        slots[0] = (True, True, p, math.atan2(normal[1], normal[0]), 0.0, slack)
+        flags["stretch"] = stretch > 2 * along
+        if flags["stretch"]:
+            mid = stretch / 2
+            slots[0] = (
+                True,
+                True,
+                p + mid * d,
+                math.atan2(normal[1], normal[0]),
+                math.pi,
+                slack + mid,
+            )
+        else:
+            slots[0] = (True, True, p, math.atan2(normal[1], normal[0]), 0.0, slack)
         if flags["vertex"]:
             centre, spread = _cone(normal, n[adjacent])
             slots.append((True, True, p, centre, spread, slack))
         away = float(d @ n[adjacent]) > -graze
-        if (flags["vertex"] and away) or flags["grazing"] or flags["end_of_path"]:
+        slip = (
+            (flags["vertex"] and away)
+            or flags["grazing"]
+            or flags["end_of_path"]
+            or flags["shallow"]
+        )
+        if flags["close_pass"] and (not flags["vertex"] or not slip):
+            centre, spread = _cone(n[posed.prev[h, k]], n[k])
+            slots.append((True, True, s[k], centre, spread, 0.0))
+        if slip:
             near = [g for g in faces if _seg_dist(p, s[g], e[g]) <= vertex_tol]
             t2, f2 = hits(near, front_only=True)
             if flags["end_of_path"] or f2 < 0:
@@ -258,7 +332,15 @@ def test_outcomes_match_slow_reference(scene):
     origins, directions, lengths = random_rays(posed, np.random.default_rng(seed))
     out = predict_outcomes(posed, origins, directions, lengths, sensor, config)
     conf = confusability(posed, out, sensor, config)
-    for name in ("vertex", "grazing", "near_miss", "end_of_path"):
+    for name in (
+        "vertex",
+        "grazing",
+        "near_miss",
+        "end_of_path",
+        "shallow",
+        "close_pass",
+        "stretch",
+    ):
         if getattr(out, name).any():
             event(name)
     for c in range(len(origins)):
@@ -409,6 +491,9 @@ def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
         grazing=np.zeros(hit.shape[:2], dtype=bool),
         near_miss=np.zeros(hit.shape[:2], dtype=bool),
         end_of_path=np.zeros(hit.shape[:2], dtype=bool),
+        shallow=np.zeros(hit.shape[:2], dtype=bool),
+        close_pass=np.zeros(hit.shape[:2], dtype=bool),
+        stretch=np.zeros(hit.shape[:2], dtype=bool),
         slot_valid=valid,
         slot_hit=hit,
         slot_point=point,
