@@ -17,12 +17,21 @@ World frame, lengths in the object files' unit, angles in radians.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
-from planner.outcomes import Outcomes, PosedSet
+from planner.candidates import Candidates
+from planner.outcomes import (
+    OutcomeConfig,
+    Outcomes,
+    PosedSet,
+    SurvivorTable,
+    class_bits,
+    predict_outcomes,
+)
 from planner.pose import (
     consistent_set_bounds,
     fit_batch,
@@ -30,9 +39,11 @@ from planner.pose import (
     point_bounds,
     worst_case_bounds,
 )
+from planner.scoring import InformationScores, information_scores
+from planner.survivors import pin_families
 from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds
 
-__all__ = ["Refinement", "refinement"]
+__all__ = ["Refinement", "refinement", "scores_after"]
 
 #: Rotations sampled by the consistent-set sweep when predicting (as the recognition does).
 _SWEEP_SAMPLES = 25
@@ -152,3 +163,26 @@ def refinement(
             rotation[rows] = np.minimum(rotation[rows], d_theta)
     weight = posed.class_weight
     return Refinement(before, after, rotation, after @ weight, float(before @ weight))
+
+
+def scores_after(
+    hypotheses: Sequence[Hypothesis],
+    posed: PosedSet,
+    refine: Refinement,
+    index: int,
+    path: Candidates,
+    sensor: SensorBounds,
+    config: OutcomeConfig,
+) -> InformationScores:
+    """Information scores (one row) of candidate `index` (`path`, one candidate)
+    under the outcome model with the disks and rotation bounds each class is
+    predicted to have once the touch is made (each class' best member's)."""
+    cls = posed.cls
+    after = dataclasses.replace(
+        posed, eps_t=refine.after[index][cls], rotation=refine.rotation[index][cls]
+    )
+    outcome = predict_outcomes(after, path.origins, path.directions, path.lengths, sensor, config)
+    bits = pin_families(
+        hypotheses, after, outcome, class_bits(after, outcome, sensor, config), sensor
+    )
+    return information_scores(SurvivorTable.from_bits(bits, after.class_weight))

@@ -18,7 +18,6 @@ returns an uninformative path while an informative candidate exists.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 import time
 from collections.abc import Callable, Mapping, Sequence
@@ -41,7 +40,7 @@ from planner.outcomes import (
 )
 from planner.plans import REFINING, Plan, PlannedPath, opening_path
 from planner.probes import opening_probe, strategy_paths
-from planner.refine import refinement
+from planner.refine import refinement, scores_after
 from planner.scoring import (
     FAMILIES,
     UNINFORMATIVE,
@@ -51,6 +50,7 @@ from planner.scoring import (
     motion_cost,
 )
 from planner.search import Deadline, expected_remaining
+from planner.survivors import pin_families, repeated_paths
 from planner.types import (
     Contact,
     Hypothesis,
@@ -70,10 +70,8 @@ __all__ = [
     "StrategyConfig",
     "analyse",
     "opening_path",
-    "pin_families",
     "plan",
     "rank_candidates",
-    "repeated_paths",
 ]
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
@@ -255,103 +253,6 @@ def analyse(
     return Analysis(posed, cands, found, table, info, motion, truncated)
 
 
-def pin_families(
-    hypotheses: Sequence[Hypothesis],
-    posed: PosedSet,
-    outcomes: Outcomes,
-    bits: np.ndarray,
-    sensor: SensorBounds,
-) -> np.ndarray:
-    """Survivor bits (C, K, W) with the samples of one slide family told apart
-    where a path pins the family.
-
-    A family (touched faces all parallel, DESIGN §4.6) is sampled along its slide,
-    one class per sample. When a path meets two samples surely (no vertex, grazing
-    or end-of-path doubt) on the same face, not parallel to the touched ones, the
-    contact fixes the slide: the family becomes one determined pose, the sample
-    the truth is, and the other sample does not survive as a class of its own.
-    Their disks (which carry the sample spacing) would otherwise call them
-    confusable, and the touch that ends the family would never look
-    distinguishing.
-    """
-    # a family: one interpretation (object, stable pose, faces touched, all parallel)
-    tol = math.sin(2 * sensor.normal_error + 1e-6)
-    assigned = np.array([[-1 if a is None else a for a in h.assignment] for h in hypotheses])
-    if assigned.size == 0:
-        return bits
-    on = assigned >= 0
-    first = np.argmax(on, axis=1)
-    rows = np.arange(len(hypotheses))
-    n = posed.normal[rows[:, None], np.maximum(assigned, 0)]  # (H, s, 2)
-    u = n[rows, first]  # (H, 2): a touched face's posed normal
-    cross = np.abs(n[..., 0] * u[:, None, 1] - n[..., 1] * u[:, None, 0])
-    parallel = on.any(axis=1) & np.all(~on | (cross <= tol), axis=1)
-    ident: dict[tuple, int] = {}
-    label = [ident.setdefault((h.family, h.object, h.stable_pose), len(ident)) for h in hypotheses]
-    _, family = np.unique(np.column_stack([label, assigned]), axis=0, return_inverse=True)
-    family = np.where(parallel, family.ravel(), -1)
-    members = np.bincount(posed.cls, minlength=posed.n_classes)
-    # classes of one hypothesis, sampled from a family with siblings
-    solo = (members[posed.cls] == 1) & (family >= 0)
-    siblings = np.unique(family[solo], return_counts=True)
-    shared = siblings[0][siblings[1] > 1]
-    if not len(shared):
-        return bits
-    bits = bits.copy()
-    sure = outcomes.hit & ~outcomes.uncertain  # (C, H)
-    for f in shared:
-        hs = np.flatnonzero(solo & (family == f))
-        hit_n = outcomes.normal[:, hs]  # (C, S, 2)
-        un = u[hs[0]]  # the family's touched faces are all parallel to it
-        pins = sure[:, hs] & (np.abs(hit_n[..., 0] * un[1] - hit_n[..., 1] * un[0]) > tol)
-        same = (outcomes.face[:, hs, None] == outcomes.face[:, None, hs]) & (
-            pins[:, :, None] & pins[:, None, :]
-        )  # (C, S, S): the sample pair is pinned apart on that path
-        for b, h in enumerate(hs):
-            k = int(posed.cls[h])
-            word, bit = k // 64, np.uint64(1) << np.uint64(k % 64)
-            rows = posed.cls[hs]
-            apart = same[:, :, b]
-            apart[:, b] = False
-            bits[:, rows, word] &= np.where(apart, ~bit, ~np.uint64(0))
-    return bits
-
-
-def repeated_paths(
-    cands: Candidates,
-    observations: Sequence[Observation],
-    posed: PosedSet,
-    sensor: SensorBounds,
-) -> np.ndarray:
-    """(C,) bool: does each candidate repeat a path already taken?
-
-    A candidate repeats an observation when it runs the same way (directions
-    within ``2 phi``) along the same line (within ``2 eps_d + min eps_t / 2`` of the
-    observed contact, or of a missed path's point nearest the candidate's aim).
-    Every hypothesis still standing agreed with that observation within its
-    tolerances, so the repeat can only measure it again: it teaches nothing the
-    outcome model could count on (with errors, taking it again loops).
-    """
-    out = np.zeros(len(cands), dtype=bool)
-    if not len(cands) or not observations:
-        return out
-    eps_d, phi = sensor.position_error, sensor.normal_error
-    reach = 2 * eps_d + float(posed.eps_t.min()) / 2 + 1e-9 * posed.scale
-    d = cands.directions
-    for obs in observations:
-        o, u = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
-        same_way = d @ u >= np.cos(2 * phi + 1e-9)
-        if obs.contact is not None:
-            x = np.broadcast_to(np.asarray(obs.contact.point, dtype=float), d.shape)
-        else:  # the missed path's point nearest each candidate's aim
-            along = np.clip((cands.aims - o) @ u, 0.0, obs.path.length)
-            x = o + along[:, None] * u
-        rel = x - cands.origins
-        off = np.abs(rel[:, 0] * d[:, 1] - rel[:, 1] * d[:, 0])
-        out |= same_way & (off <= reach)
-    return out
-
-
 def rank_candidates(
     table: SurvivorTable,
     config: StrategyConfig | None = None,
@@ -509,21 +410,10 @@ def _refining(
     if not len(ok):
         return [], ranking.note
     order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]
-    cls = found.posed.cls
     paths = []
     for i in order:
-        # the path's outcome model with the disks it leaves (each class' best member's)
-        posed = dataclasses.replace(
-            found.posed, eps_t=refine.after[i][cls], rotation=refine.rotation[i][cls]
-        )
         one = found.candidates.subset([i])
-        outcome = predict_outcomes(
-            posed, one.origins, one.directions, one.lengths, sensor, config.outcome
-        )
-        bits = pin_families(
-            hypotheses, posed, outcome, class_bits(posed, outcome, sensor, config.outcome), sensor
-        )
-        info = information_scores(SurvivorTable.from_bits(bits, posed.class_weight))
+        info = scores_after(hypotheses, found.posed, refine, int(i), one, sensor, config.outcome)
         paths.append(
             _planned(
                 found,

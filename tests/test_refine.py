@@ -15,7 +15,8 @@ from planner.plans import REFINING, opening_path
 from planner.probes import search_chord
 from planner.refine import refinement
 from planner.session import Session
-from planner.strategies import STRATEGIES, StrategyConfig, analyse, plan, repeated_paths
+from planner.strategies import STRATEGIES, StrategyConfig, analyse, plan
+from planner.survivors import repeated_paths
 from planner.types import Contact, Observation, SensingPath, SensorBounds
 from tests.conftest import WORKSPACE, object_set
 
