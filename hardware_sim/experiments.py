@@ -38,6 +38,7 @@ from hardware_sim.client import InProcessService, outline_distance, run_recognit
 from hardware_sim.presets import PRESETS, Preset, build_arm, explicit_preset, resolve_preset
 from hardware_sim.world import PLACEMENTS, random_world
 from planner.errors import PlannerError
+from planner.interpretation import RecognitionConfig
 from planner.strategies import STRATEGIES, StrategyConfig
 from planner.types import ObjectModel, Workspace
 
@@ -83,6 +84,7 @@ class ExperimentSpec:
     pose_slack: float = 1e-6
     trial_timeout: float | None = None
     placement: str = "anywhere"
+    recognition: dict[str, Any] = field(default_factory=dict)
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.strategies if s not in STRATEGIES]
@@ -94,6 +96,7 @@ class ExperimentSpec:
             raise ValueError("trials and max_touches must be >= 1")
         if self.placement not in PLACEMENTS:
             raise ValueError(f"--placement must be one of {list(PLACEMENTS)}")
+        RecognitionConfig(**self.recognition)  # refuses unknown or invalid settings
 
 
 @dataclass(frozen=True)
@@ -167,6 +170,7 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
         spec.preset.bounds,
         spec.workspace,
         config,
+        RecognitionConfig(**spec.recognition),
         rng=np.random.default_rng(_seed(spec, trial, 2)),
     )
     try:
@@ -375,6 +379,14 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         help="where the true object lies: anywhere inside the safe circle (default), or "
         "centred on it as in the thesis' simulations",
     )
+    p.add_argument(
+        "--error-disk",
+        type=float,
+        default=None,
+        metavar="FRACTION",
+        help="recognize with the thesis' fixed error disk, this fraction of the object's "
+        "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="joblib processes (all cores)")
     where.add_argument("--dask", default=None, metavar="ADDRESS", help="Dask scheduler address")
@@ -460,6 +472,11 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             truth=args.truth,
             trial_timeout=getattr(args, "trial_timeout", None),
             placement=args.placement,
+            recognition=(
+                {}
+                if args.error_disk is None
+                else {"bound_mode": "thesis", "thesis_fraction": args.error_disk}
+            ),
         )
     except (ValueError, PlannerError) as exc:
         print(f"tactile simulate: error: {exc}", file=sys.stderr)
@@ -486,6 +503,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"sensor {preset.name} (bounds {b.position_error:g}, "
         f"{math.degrees(b.normal_error):g} deg), {spec.trials} trials, seed {spec.seed}, "
         f"max {spec.max_touches} touches, object placed {spec.placement}"
+        + (f", error disk {args.error_disk:g} of the diameter" if args.error_disk else "")
     )
     print("percent of trials needing N touches (unlocalized: >10)")
     print(format_table(rows))

@@ -68,6 +68,8 @@ class RecognitionConfig:
             raise ValueError("bound_mode must be 'linearized' or 'thesis'")
         if self.likelihood not in ("bounded", "gaussian"):
             raise ValueError("likelihood must be 'bounded' or 'gaussian'")
+        if not (0 < self.thesis_fraction < 1):
+            raise ValueError("thesis_fraction (the error disk) must lie in (0, 1)")
 
 
 @dataclass(frozen=True, eq=False)

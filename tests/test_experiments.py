@@ -31,8 +31,9 @@ from hardware_sim.experiments import (
 )
 from hardware_sim.presets import PRESETS, build_arm
 from hardware_sim.protocol import ProbeResult
-from hardware_sim.world import World
+from hardware_sim.world import World, random_world
 from planner.library import dump_objects, object_from_dict
+from planner.plans import opening_path
 from planner.strategies import StrategyConfig
 from planner.types import Observation, Pose, SensingPath, SensorBounds, Workspace
 
@@ -242,6 +243,33 @@ def test_simulate_names_an_unknown_truth(object_file, capsys):
     argv = ["simulate", "--objects", object_file, "--strategy", "pdm", "--truth", "nope"]
     assert main(argv) == 2
     assert "nope" in capsys.readouterr().err
+
+
+def test_simulate_refuses_a_missing_object_file_and_a_bad_error_disk(object_file, capsys):
+    argv = ["simulate", "--objects", "no_such_set.json", "--strategy", "pdm"]
+    assert main(argv) == 2
+    assert "no_such_set.json" in capsys.readouterr().err
+    argv = ["simulate", "--objects", object_file, "--strategy", "pdm", "--error-disk", "-1"]
+    assert main(argv) == 2
+    assert "error disk" in capsys.readouterr().err
+
+
+def test_simulate_in_the_thesis_setting(object_file, capsys):
+    # the object centred on the safe circle, a fixed error disk: the first probe meets it
+    argv = ["simulate", "--objects", object_file, "--truth", "ell", "--strategy", "thesis"]
+    argv += ["--trials", "2", "--seed", "1", "--max-touches", "6", "--workers", "1"]
+    argv += ["--placement", "centred", "--error-disk", "0.1", "--json"]
+    assert main(argv) == 0
+    (row,) = json.loads(capsys.readouterr().out)["strategies"]
+    assert row["trials"] == 2 and row["histogram"][">10"] < 1.0
+
+
+def test_centred_worlds_are_met_by_the_first_probe():
+    rng = np.random.default_rng(8)
+    for _ in range(30):
+        world = random_world([ELL, WEDGE], SMALL_WS, rng, placement="centred")
+        angle = rng.uniform(-math.pi, math.pi)
+        assert world.first_contact(opening_path(SMALL_WS, (0, 0), angle=angle)) is not None
 
 
 # -- calibration ----------------------------------------------------------------------------
