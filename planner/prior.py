@@ -27,11 +27,13 @@ def draw_stable_poses(
 ) -> list[tuple[int, int]]:
     """`n` draws of (object index, stable pose index) from the priors."""
     prior = np.array([m.prior if m.prior is not None else 1.0 for m in models], dtype=float)
-    out = []
-    for i in rng.choice(len(models), size=n, p=prior / prior.sum()):
+    which = rng.choice(len(models), size=n, p=prior / prior.sum())
+    pose = np.zeros(n, dtype=int)
+    for i in np.unique(which):
+        at = np.flatnonzero(which == i)
         probs = np.array([p.probability for p in models[int(i)].stable_poses])
-        out.append((int(i), int(rng.choice(len(probs), p=probs / probs.sum()))))
-    return out
+        pose[at] = rng.choice(len(probs), size=len(at), p=probs / probs.sum())
+    return [(int(i), int(j)) for i, j in zip(which, pose, strict=True)]
 
 
 def draw_poses(

@@ -15,7 +15,6 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
-import shapely
 
 from planner.candidates import Candidates, paths_through, union_centre
 from planner.errors import PlanningNotPossibleError
@@ -146,24 +145,56 @@ def _prior_extents(
 ) -> tuple[np.ndarray, np.ndarray]:
     """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
     centre, of the prior draws of the posed outline that no `missed` path meets."""
-    rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
-    items = list(models.values())
-    lines = shapely.linestrings(
-        [[p.origin, np.add(p.origin, np.multiply(p.length, p.direction))] for p in missed]
-    )
+    a = np.array([p.origin for p in missed], dtype=float)  # (M, 2) missed segments a -> b
+    b = a + np.array([np.multiply(p.length, p.direction) for p in missed], dtype=float)
     centre = np.asarray(workspace.center, dtype=float)
-    drawn = Counter(draw_stable_poses(items, samples, rng))
     lo, hi = [], []
-    for (i, j), n in sorted(drawn.items()):
-        stable = items[i].stable_poses[j]
-        theta, t = draw_poses(stable, workspace, n, rng)
-        # v_world = R(theta) v + t
-        posed = np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
-        met = shapely.intersects(shapely.polygons(posed)[:, None], lines[None]).any(axis=1)
+    for posed in _prior_draws(models, workspace, samples):
+        # a segment meets an outline it starts outside of exactly when it crosses a face
+        s, e = posed[:, :, None, :], np.roll(posed, -1, axis=1)[:, :, None, :]  # (n, V, 1, 2)
+        crosses = (_turn(a, b, s) * _turn(a, b, e) <= 0) & (_turn(s, e, a) * _turn(s, e, b) <= 0)
+        met = crosses.any(axis=(1, 2))
         proj = (posed[~met] - centre) @ normal.T  # (n, V, A)
         lo.append(proj.min(axis=1))
         hi.append(proj.max(axis=1))
     return np.concatenate(lo), np.concatenate(hi)
+
+
+def _turn(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Sign of the turn p -> q -> r (cross product of q - p and r - p), broadcast."""
+    return np.sign(
+        (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
+        - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
+    )
+
+
+#: Prior draws per (objects, safe circle, count): fixed, so kept (with their objects,
+#: which keeps the ids in the key valid).
+_DRAWS: dict[tuple, tuple[list, list[np.ndarray]]] = {}
+
+
+def _prior_draws(
+    models: Mapping[str, ObjectModel], workspace: Workspace, samples: int
+) -> list[np.ndarray]:
+    """`samples` fixed draws of the posed outline from the prior, grouped by stable
+    pose: a list of (n, V, 2) world vertex arrays."""
+    items = list(models.values())
+    key = (tuple(id(m) for m in items), workspace.center, workspace.radius, samples)
+    if key not in _DRAWS:
+        rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
+        drawn = Counter(draw_stable_poses(items, samples, rng))
+        groups = []
+        for (i, j), n in sorted(drawn.items()):
+            stable = items[i].stable_poses[j]
+            theta, t = draw_poses(stable, workspace, n, rng)
+            # v_world = R(theta) v + t
+            groups.append(
+                np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
+            )
+        if len(_DRAWS) >= 16:
+            _DRAWS.pop(next(iter(_DRAWS)))
+        _DRAWS[key] = (items, groups)
+    return _DRAWS[key][1]
 
 
 def _chords(aim: np.ndarray, angles: np.ndarray, workspace: Workspace, source: str) -> Candidates:
