@@ -121,7 +121,8 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
     vertex_tol = geometric + sensor.position_error
     graze = math.sin(min(config.grazing_angle + posed.rotation[h], math.pi / 2))
 
-    def hits(excluded=(), front_only=False):
+    def hits(excluded=(), front_only=False, after=None):
+        """The first face met (t, f), or the first crossing strictly beyond `after`."""
         best = (math.inf, -1)
         for f in faces:
             if f in excluded or (front_only and d @ n[f] >= 0):
@@ -133,23 +134,9 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             w = s[f] - o
             t = (w[0] * edge[1] - w[1] * edge[0]) / denom
             u = (w[0] * d[1] - w[1] * d[0]) / denom
-            if 0 <= t <= length and 0 <= u <= 1 and t < best[0]:
+            beyond = t >= 0 if after is None else t > after
+            if beyond and t <= length and 0 <= u <= 1 and t < best[0]:
                 best = (t, f)
-        return best
-
-    def crossings(after):
-        """The first face crossing strictly beyond `after` along the path."""
-        best = (math.inf, -1)
-        for g in faces:
-            edge = e[g] - s[g]
-            denom = d[0] * edge[1] - d[1] * edge[0]
-            if abs(denom) <= 1e-12 * posed.length[h, g]:
-                continue
-            w = s[g] - o
-            tg = (w[0] * edge[1] - w[1] * edge[0]) / denom
-            u = (w[0] * d[1] - w[1] * d[0]) / denom
-            if after < tg <= length and 0 <= u <= 1 and tg < best[0]:
-                best = (tg, g)
         return best
 
     t, f = hits()
@@ -175,7 +162,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
         along = geometric / max(cos_in, graze)
         flags["end_of_path"] = t > length - along
         # shallow: the deepest point of the chord to the next crossing
-        t_exit, f_exit = crossings(t + 1e-9 * posed.scale)
+        t_exit, f_exit = hits(after=t + 1e-9 * posed.scale)
         chord = (t_exit if f_exit >= 0 else length) - t
         depth = chord / 2
         if f_exit >= 0:
