@@ -36,8 +36,8 @@ def pin_families(
     where a path pins the family.
 
     A family (touched faces all parallel, DESIGN §4.6) is sampled along its slide,
-    one class per sample. When a path meets two samples surely (no vertex, grazing
-    or end-of-path doubt) on the same face, not parallel to the touched ones, the
+    one class per sample. When a path meets two samples surely (no alternative
+    outcome, :attr:`Outcomes.uncertain`) on the same face, not parallel to the touched ones, the
     contact fixes the slide: the family becomes one determined pose, the sample
     the truth is, and the other sample does not survive as a class of its own.
     Their disks (which carry the sample spacing) would otherwise call them
@@ -80,10 +80,10 @@ def pin_families(
         for b, h in enumerate(hs):
             k = int(posed.cls[h])
             word, bit = k // 64, np.uint64(1) << np.uint64(k % 64)
-            rows = posed.cls[hs]
+            classes = posed.cls[hs]
             apart = same[:, :, b]
             apart[:, b] = False
-            bits[:, rows, word] &= np.where(apart, ~bit, ~np.uint64(0))
+            bits[:, classes, word] &= np.where(apart, ~bit, ~np.uint64(0))
     return bits
 
 
