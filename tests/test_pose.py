@@ -33,12 +33,19 @@ def _rank2(world, faces) -> bool:
     )
 
 
-def _fit(world, obs, faces, bounds):
+def _arrays(world, obs, faces):
+    """Measured points and normals (s, 2), and the faces' normals and offsets (1, s)."""
     stable = world.stable
     P = np.array([o.contact.point for o in obs])
     U = np.array([o.contact.normal for o in obs])
-    fn = stable.faces.normal[faces][None]
-    fo = stable.faces.offset[faces][None]
+    return P, U, stable.faces.normal[faces][None], stable.faces.offset[faces][None]
+
+
+def _fit(world, obs, faces, bounds, per_row=False):
+    stable = world.stable
+    P, U, fn, fo = _arrays(world, obs, faces)
+    if per_row:
+        P, U = P[None], U[None]
     sd, sp = noise_scales(bounds.position_error, bounds.normal_error, stable.centroid_radius)
     return fit_batch(P, U, fn, fo, np.ones((1, len(obs)), bool), stable.centroid[None], sd, sp)
 
@@ -100,16 +107,12 @@ def test_per_row_contacts_give_the_shared_fit(name, seed, count):
     world = random_world(object_set(name), WORKSPACE, rng)
     obs, faces = _touches(world, bounds, rng, count)
     shared = _fit(world, obs, faces, bounds)
-    P = np.array([o.contact.point for o in obs])
-    U = np.array([o.contact.normal for o in obs])
-    stable = world.stable
-    fn, fo = stable.faces.normal[faces][None], stable.faces.offset[faces][None]
-    sd, sp = noise_scales(1.0, math.radians(5), stable.centroid_radius)
-    assigned = np.ones((1, len(obs)), bool)
-    rows = fit_batch(P[None], U[None], fn, fo, assigned, stable.centroid[None], sd, sp)
+    rows = _fit(world, obs, faces, bounds, per_row=True)
     np.testing.assert_allclose(rows.z, shared.z, rtol=1e-12, atol=1e-12)
     np.testing.assert_allclose(rows.sens, shared.sens, rtol=1e-9, atol=1e-12)
-    args = (fn, fo, assigned, shared.theta, shared.t, stable.outline, 1.0, math.radians(5))
+    P, U, fn, fo = _arrays(world, obs, faces)
+    assigned = np.ones((1, len(obs)), bool)
+    args = (fn, fo, assigned, shared.theta, shared.t, world.stable.outline, 1.0, math.radians(5))
     a = consistent_set_bounds(P, U, *args)
     b = consistent_set_bounds(P[None], U[None], *args)
     np.testing.assert_allclose(a.moved, b.moved)
@@ -130,10 +133,7 @@ def test_consistent_set_bound_covers_the_true_pose(name, seed, count):
     fit = _fit(world, obs, faces, bounds)
     stable = world.stable
     found = consistent_set_bounds(
-        np.array([o.contact.point for o in obs]),
-        np.array([o.contact.normal for o in obs]),
-        stable.faces.normal[faces][None],
-        stable.faces.offset[faces][None],
+        *_arrays(world, obs, faces),
         np.ones((1, len(obs)), bool),
         fit.theta,
         fit.t,
