@@ -169,18 +169,19 @@ def scores_after(
     hypotheses: Sequence[Hypothesis],
     posed: PosedSet,
     refine: Refinement,
+    candidates: Candidates,
     index: int,
-    path: Candidates,
     sensor: SensorBounds,
     config: OutcomeConfig,
 ) -> InformationScores:
-    """Information scores (one row) of candidate `index` (`path`, one candidate)
-    under the outcome model with the disks and rotation bounds each class is
-    predicted to have once the touch is made (each class' best member's)."""
+    """Information scores (one row) of candidate `index` of `candidates` under the
+    outcome model with the disks and rotation bounds each class is predicted to
+    have once the touch is made (each class' best member's)."""
     cls = posed.cls
     after = dataclasses.replace(
         posed, eps_t=refine.after[index][cls], rotation=refine.rotation[index][cls]
     )
+    path = candidates.subset([index])
     outcome = predict_outcomes(after, path.origins, path.directions, path.lengths, sensor, config)
     bits = pin_families(
         hypotheses, after, outcome, class_bits(after, outcome, sensor, config), sensor

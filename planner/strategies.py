@@ -412,8 +412,9 @@ def _refining(
     order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]
     paths = []
     for i in order:
-        one = found.candidates.subset([i])
-        info = scores_after(hypotheses, found.posed, refine, int(i), one, sensor, config.outcome)
+        info = scores_after(
+            hypotheses, found.posed, refine, found.candidates, int(i), sensor, config.outcome
+        )
         paths.append(
             _planned(
                 found,
