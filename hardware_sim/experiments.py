@@ -39,7 +39,7 @@ from hardware_sim.presets import PRESETS, Preset, build_arm, explicit_preset, re
 from hardware_sim.world import PLACEMENTS, random_world
 from planner.errors import PlannerError
 from planner.interpretation import RecognitionConfig
-from planner.strategies import STRATEGIES, StrategyConfig
+from planner.strategies import STRATEGIES, THESIS_CHOICES, StrategyConfig
 from planner.types import ObjectModel, Workspace
 
 __all__ = [
@@ -387,6 +387,13 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         help="recognize with the thesis' fixed error disk, this fraction of the object's "
         "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
     )
+    p.add_argument(
+        "--thesis-choice",
+        default="choose",
+        choices=THESIS_CHOICES,
+        help="how `thesis` picks among its best windows: the nearest origin (the thesis' "
+        "hardware, default) or at random (the thesis' simulations)",
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="joblib processes (all cores)")
     where.add_argument("--dask", default=None, metavar="ADDRESS", help="Dask scheduler address")
@@ -472,6 +479,9 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             truth=args.truth,
             trial_timeout=getattr(args, "trial_timeout", None),
             placement=args.placement,
+            strategy=(
+                {} if args.thesis_choice == "choose" else {"thesis_choice": args.thesis_choice}
+            ),
             recognition=(
                 {}
                 if args.error_disk is None
@@ -504,6 +514,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
         f"{math.degrees(b.normal_error):g} deg), {spec.trials} trials, seed {spec.seed}, "
         f"max {spec.max_touches} touches, object placed {spec.placement}"
         + (f", error disk {args.error_disk:g} of the diameter" if args.error_disk else "")
+        + (f", thesis picks {args.thesis_choice}" if "thesis" in spec.strategies else "")
     )
     print("percent of trials needing N touches (unlocalized: >10)")
     print(format_table(rows))

@@ -80,14 +80,21 @@ class CandidateConfig:
 
 @dataclass(frozen=True, eq=False)
 class Candidates:
-    """C paths: `origins`, unit `directions`, `aims` (C, 2), `lengths` (C,), and
-    `source` (C,) naming where each came from (extra, intersection, boundary, ...)."""
+    """C paths: `origins`, unit `directions`, `aims` (C, 2), `lengths` (C,),
+    `source` (C,) naming where each came from (extra, intersection, boundary, ...),
+    and `tier` (C,) the rank a strategy gave its own paths (the thesis window's
+    level of admitted strength; 0 elsewhere)."""
 
     origins: np.ndarray
     directions: np.ndarray
     lengths: np.ndarray
     aims: np.ndarray
     source: np.ndarray
+    tier: np.ndarray | None = None
+
+    def __post_init__(self) -> None:
+        if self.tier is None:
+            object.__setattr__(self, "tier", np.zeros(len(self.lengths), dtype=int))
 
     def __len__(self) -> int:
         return len(self.lengths)
@@ -105,6 +112,7 @@ class Candidates:
             self.lengths[idx],
             self.aims[idx],
             self.source[idx],
+            self.tier[idx],
         )
 
     @classmethod
@@ -123,7 +131,7 @@ class Candidates:
         return cls(
             *(
                 np.concatenate([getattr(p, k) for p in parts])
-                for k in ("origins", "directions", "lengths", "aims", "source")
+                for k in ("origins", "directions", "lengths", "aims", "source", "tier")
             )
         )
 
@@ -133,8 +141,9 @@ class Candidates:
         paths: Sequence[SensingPath],
         source: str = "extra",
         aims: np.ndarray | None = None,
+        tier: np.ndarray | None = None,
     ) -> Candidates:
-        """Wrap given paths; the aim defaults to the path's end point."""
+        """Wrap given paths; the aim defaults to the path's end point, the tier to 0."""
         if not paths:
             return cls.empty()
         origins = np.array([p.origin for p in paths], dtype=float)
@@ -147,6 +156,7 @@ class Candidates:
             lengths,
             end if aims is None else np.asarray(aims, float),
             np.full(len(paths), source, dtype="<U12"),
+            None if tier is None else np.asarray(tier, dtype=int),
         )
 
 

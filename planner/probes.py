@@ -250,6 +250,7 @@ def strategy_paths(
         [w.path for w in windows],
         source="window",
         aims=np.array([w.aim for w in windows]).reshape(-1, 2),
+        tier=np.array([w.level for w in windows], dtype=int),
     )
 
 

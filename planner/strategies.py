@@ -75,6 +75,7 @@ __all__ = [
 ]
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
+THESIS_CHOICES = ("choose", "random")
 
 #: Fewest candidates per block when a time budget splits the outcome passes, and
 #: fewest candidates x hypotheses per block.
@@ -93,8 +94,11 @@ class StrategyConfig:
     touches deep), `max_paths` in the ranked list,
     `motion_weight` (touches per unit of motion length in the combined
     objective; 0 = motion only breaks ties), `random_draws` (origins drawn at
-    once by ``random``), `grid_size` (B of the thesis' B x B grid), and the
-    candidate and outcome settings."""
+    once by ``random``), `grid_size` (B of the thesis' B x B grid),
+    `thesis_choice` (how ``thesis`` picks among the windows of the lowest admitted
+    strength: ``choose``, the nearest origin, as the thesis' hardware did (ch. 5),
+    or ``random``, as its simulations did (§4.3.6)), and the candidate and outcome
+    settings."""
 
     name: str = "lookahead"
     depth: int = 2
@@ -104,6 +108,7 @@ class StrategyConfig:
     motion_weight: float = 0.0
     random_draws: int = 16
     grid_size: int = 70
+    thesis_choice: str = "choose"
     candidates: CandidateConfig = field(default_factory=CandidateConfig)
     outcome: OutcomeConfig = field(default_factory=OutcomeConfig)
 
@@ -115,6 +120,10 @@ class StrategyConfig:
         for name in ("depth", "max_paths", "random_draws", "grid_size"):
             if getattr(self, name) < 1:
                 raise PlannerError("must be >= 1", field=f"strategy.{name}")
+        if self.thesis_choice not in THESIS_CHOICES:
+            raise PlannerError(
+                f"must be one of {list(THESIS_CHOICES)}", field="strategy.thesis_choice"
+            )
         if self.optimal_max_classes < 1:
             raise PlannerError("must be >= 1", field="strategy.optimal_max_classes")
         if self.budget_ms is not None and not (
@@ -260,6 +269,7 @@ def rank_candidates(
     info: InformationScores | None = None,
     motion: np.ndarray | None = None,
     source: np.ndarray | None = None,
+    tier: np.ndarray | None = None,
     rng: np.random.Generator | int | None = None,
     deadline: Deadline | None = None,
 ) -> Ranking:
@@ -267,7 +277,8 @@ def rank_candidates(
 
     `motion` (C,) defaults to zero; `source` (C,) names each candidate's origin
     (``random`` draws and thesis ``probe``/``window`` rows are what those
-    strategies pick from); `deadline` bounds the search. Expected remaining
+    strategies pick from) and `tier` (C,) their rank (the windows' level, default
+    0); `deadline` bounds the search. Expected remaining
     touches are computed for the first `max_paths` of the order when the
     strategy did not compute them itself (``random``, ``thesis``, ``pdm``,
     ``pruning``): searched `depth` touches deep when there are at most
@@ -282,6 +293,7 @@ def rank_candidates(
         info if info is not None else information_scores(table),
         np.zeros(n) if motion is None else np.asarray(motion, dtype=float),
         np.full(n, "", dtype="<U12") if source is None else np.asarray(source),
+        np.zeros(n, dtype=int) if tier is None else np.asarray(tier, dtype=int),
         _rng(rng),
         deadline or Deadline.after_ms(config.budget_ms),
     )
@@ -370,6 +382,7 @@ def plan(
         info=found.info,
         motion=found.motion,
         source=found.candidates.source,
+        tier=found.candidates.tier,
         rng=gen,
         deadline=deadline,
     )
@@ -467,6 +480,7 @@ class _Context:
     info: InformationScores
     motion: np.ndarray
     source: np.ndarray
+    tier: np.ndarray
     rng: np.random.Generator
     deadline: Deadline
 
@@ -538,11 +552,18 @@ def _random(ctx: _Context) -> Ranking:
 
 
 def _thesis(ctx: _Context) -> Ranking:
-    for kind in ("probe", "random", "window"):
-        # windows come in CHOOSE order (lowest admitted strength, then nearest origin)
+    for kind in ("probe", "random"):
         rows = _informative(ctx, np.flatnonzero(ctx.source == kind))
         if len(rows):
             return _unscored(ctx, rows)
+    # windows come in CHOOSE order (lowest admitted strength, then nearest origin)
+    rows = _informative(ctx, np.flatnonzero(ctx.source == "window"))
+    if len(rows) and ctx.config.thesis_choice == "random":
+        # §4.3.6: "at random from among the most highly diagnostic family of paths"
+        family = ctx.tier[rows] == ctx.tier[rows].min()
+        rows = np.concatenate([ctx.rng.permutation(rows[family]), rows[~family]])
+    if len(rows):
+        return _unscored(ctx, rows)
     fallback = _pdm(ctx)
     note = (
         "no informative thesis window: best P(DM) among all candidates"

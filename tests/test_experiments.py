@@ -262,6 +262,13 @@ def test_simulate_in_the_thesis_setting(object_file, capsys):
     assert main(argv) == 0
     (row,) = json.loads(capsys.readouterr().out)["strategies"]
     assert row["trials"] == 2 and row["histogram"][">10"] < 1.0
+    # the thesis' simulations picked at random among the best windows
+    argv = [*argv[:-1], "--thesis-choice", "random"]
+    assert main(argv) == 0
+    assert "thesis picks random" in capsys.readouterr().out
+    with pytest.raises(SystemExit):
+        main([*argv[:-2], "--thesis-choice", "nearest"])
+    assert "--thesis-choice" in capsys.readouterr().err
 
 
 def test_centred_worlds_are_met_by_the_first_probe():

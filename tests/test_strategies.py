@@ -216,6 +216,29 @@ def test_thesis_windows_after_two_contacts():
     assert result.paths[0].source == "window"  # in CHOOSE order, informative ones only
 
 
+def test_thesis_choice_picks_within_the_lowest_level_of_windows():
+    # four classes; every path tells one class from the rest, so all are informative
+    conf = np.ones((5, 4, 4), dtype=bool)
+    for c in range(4):
+        conf[c, c, :] = conf[c, :, c] = False
+        conf[c, c, c] = True
+    conf[4] = conf[0]
+    table = SurvivorTable.from_matrix(conf, np.full(4, 0.25))
+    source = np.array(["window"] * 4 + ["boundary"])
+    tier = np.array([0, 0, 0, 1, 0])  # windows in CHOOSE order: three at the lowest level
+    chosen = rank_candidates(table, StrategyConfig(name="thesis"), source=source, tier=tier, rng=0)
+    np.testing.assert_array_equal(chosen.order, [0, 1, 2, 3])
+    firsts = set()
+    for seed in range(20):
+        config = StrategyConfig(name="thesis", thesis_choice="random")
+        order = rank_candidates(table, config, source=source, tier=tier, rng=seed).order
+        assert sorted(order[:3]) == [0, 1, 2] and order[3] == 3
+        firsts.add(int(order[0]))
+    assert firsts == {0, 1, 2}
+    with pytest.raises(PlannerError, match="thesis_choice"):
+        StrategyConfig(name="thesis", thesis_choice="nearest")
+
+
 def test_optimal_says_when_it_plays_lookahead():
     hyps = [hyp("triangle", 3 * i, 0, 0.2 * i, cls=i, p=1 / 5) for i in range(5)]
     config = StrategyConfig(name="optimal", optimal_max_classes=3, **FAST)
