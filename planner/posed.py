@@ -303,7 +303,7 @@ def _outcome_chunk(
         fc, origins, directions, lengths, hit
     )
 
-    close_pass, pass_x, pass_y, p_centre, p_spread = _close_pass(fc, origins, hit, f, rows, px, py)
+    close_pass, pass_x, pass_y, p_centre, p_spread = _close_pass(fc, origins, hit, rows, px, py)
     # a vertex hit keeps slot 1 for its own vertex: its close pass goes to a free slot 2
     in_slot1 = close_pass & ~vertex
     in_slot2 = close_pass & vertex & ~slip
@@ -328,10 +328,15 @@ def _outcome_chunk(
     zero = np.zeros_like(angle0)
     slack = np.where(hit, along - geometric, 0.0)
     hit_x, hit_y = np.where(hit, px, nan), np.where(hit, py, nan)
-    mid = np.where(long_stretch, stretch / 2, 0.0)  # slot 0 spans the stretch
+    # slot 0 spans the stretch past the hit; a close pass with no slot left to hold
+    # it (a vertex hit that may slip) stretches slot 0 back to the pass instead
+    crowded = close_pass & vertex & slip
+    lo = np.where(crowded, np.minimum(np.nan_to_num(along_pass), reached), reached)
+    hi = reached + np.where(long_stretch, stretch, 0.0)
+    mid, half = (lo + hi) / 2 - reached, (hi - lo) / 2
     nominal_x, nominal_y = hit_x + mid * dx, hit_y + mid * dy
-    nominal_slack = slack + mid
-    nominal_spread = np.where(long_stretch, math.pi, 0.0)
+    nominal_slack = slack + half
+    nominal_spread = np.where(long_stretch | crowded, math.pi, 0.0)
     slip_x = np.where(slip_hit, origins[:, 0, None] + slip_dist * dx, nan)
     slip_y = np.where(slip_hit, origins[:, 1, None] + slip_dist * dy, nan)
     slip_x, slip_y = np.where(in_slot2, pass_x, slip_x), np.where(in_slot2, pass_y, slip_y)
@@ -473,23 +478,22 @@ def _close_pass(
     fc: _Faces,
     origins: np.ndarray,
     hit: np.ndarray,
-    f: np.ndarray,
     rows: np.ndarray,
     px: np.ndarray,
     py: np.ndarray,
 ) -> tuple[np.ndarray, ...]:
     """Hits whose path passes within the vertex zone (`geometric` plus the
     position error: what the recognition allows a contact) of a vertex before
-    reaching the contact (a vertex other than the face hit's own, outside its
-    vertex zone): the true outline may be met there first. Returns (flag, the vertex's x and y,
-    centre and half-width of the normals there), each (c, H)."""
+    reaching the contact (any vertex outside the contact's own vertex zone, the
+    hit face's ends included): the true outline may be met there first. Returns
+    (flag, the vertex's x and y, centre and half-width of the normals there), each
+    (c, H)."""
     ox, oy = origins[:, 0, None, None], origins[:, 1, None, None]
     gap = segment_distance(fc.sx, fc.sy, ox, oy, px[..., None], py[..., None])  # (c, H, F)
-    own = (np.arange(fc.sx.shape[1]) == f[..., None]) | (
-        np.arange(fc.sx.shape[1]) == fc.next[rows, f][..., None]
-    )
+    # the face hit's own ends count too: a path that runs past one of them at a
+    # shallow angle may meet the adjacent face there first
     near_contact = np.hypot(fc.sx - px[..., None], fc.sy - py[..., None]) <= fc.vertex_tol[:, None]
-    gap = np.where(fc.valid & ~own & ~near_contact & hit[..., None], gap, np.inf)
+    gap = np.where(fc.valid & ~near_contact & hit[..., None], gap, np.inf)
     k = np.argmin(gap, axis=-1)
     flag = np.take_along_axis(gap, k[..., None], axis=-1)[..., 0] <= fc.vertex_tol
     vx, vy = fc.sx[rows, k], fc.sy[rows, k]

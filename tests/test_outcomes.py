@@ -170,12 +170,8 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             corner = chord * a * b / max(a + b, 1e-12)
             depth = min(depth, corner)
         flags["shallow"] = depth < geometric
-        # close pass: a vertex other than the hit face's own within its zone of the way in
-        passes = [
-            (_seg_dist(s[k], o, p), k)
-            for k in faces
-            if k != f and k != posed.next[h, f] and math.hypot(*(s[k] - p)) > vertex_tol
-        ]
+        # close pass: a vertex outside the contact's zone within its zone of the way in
+        passes = [(_seg_dist(s[k], o, p), k) for k in faces if math.hypot(*(s[k] - p)) > vertex_tol]
         gap, k = min(passes, default=(math.inf, -1))
         flags["close_pass"] = gap <= vertex_tol
         # stretch: past a hit on a short face or near a vertex, how long the path stays
@@ -193,21 +189,6 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
                     break
         slack = along - geometric
         flags["stretch"] = stretch > 2 * along
-        if flags["stretch"]:
-            mid = stretch / 2
-            slots[0] = (
-                True,
-                True,
-                p + mid * d,
-                math.atan2(normal[1], normal[0]),
-                math.pi,
-                slack + mid,
-            )
-        else:
-            slots[0] = (True, True, p, math.atan2(normal[1], normal[0]), 0.0, slack)
-        if flags["vertex"]:
-            centre, spread = _cone(normal, n[adjacent])
-            slots.append((True, True, p, centre, spread, slack))
         away = float(d @ n[adjacent]) > -graze
         slip = (
             (flags["vertex"] and away)
@@ -215,6 +196,25 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             or flags["end_of_path"]
             or flags["shallow"]
         )
+        # slot 0: from the hit over the stretch; back to a close pass left without a slot
+        lo = t
+        if flags["close_pass"] and flags["vertex"] and slip:
+            lo = min(float((s[k] - o) @ d), t)
+        hi = t + (stretch if flags["stretch"] else 0.0)
+        if hi > lo:
+            slots[0] = (
+                True,
+                True,
+                o + (lo + hi) / 2 * d,
+                math.atan2(normal[1], normal[0]),
+                math.pi,
+                slack + (hi - lo) / 2,
+            )
+        else:
+            slots[0] = (True, True, p, math.atan2(normal[1], normal[0]), 0.0, slack)
+        if flags["vertex"]:
+            centre, spread = _cone(normal, n[adjacent])
+            slots.append((True, True, p, centre, spread, slack))
         if flags["close_pass"] and (not flags["vertex"] or not slip):
             centre, spread = _cone(n[posed.prev[h, k]], n[k])
             slots.append((True, True, s[k], centre, spread, 0.0))
@@ -591,6 +591,19 @@ def test_near_miss_is_confusable_with_a_hit_at_the_corner():
     # further away it is a plain miss
     _, out2, _ = cast([h], [[25.0, 100.0]], [[0.0, -1.0]], [100.0])
     assert not out2.near_miss[0, 0] and not out2.uncertain[0, 0]
+
+
+def test_a_grazing_corner_hit_may_come_at_the_corner_passed_before():
+    # the path runs 0.5 below h's corner (-20, -20), then grazes its bottom face up to
+    # the far corner: the true outline may be met at the first corner already
+    h = hyp("square", 0, 0, cls=0, eps_t=2.0)
+    g = hyp("square", 0, -0.8, cls=1, eps_t=2.0)  # met square on its left face there
+    d = np.array([39.8, 0.5]) / math.hypot(39.8, 0.5)
+    origin = np.array([-20.0, -20.5]) - 40.0 * d / d[0]
+    _, out, conf = cast([h, g], [origin], [d], [100.0])
+    assert out.vertex[0, 0] and out.grazing[0, 0] and out.close_pass[0, 0]
+    assert out.point[0, 1, 0] == pytest.approx(-20.0)
+    assert conf[0, 0, 1] and conf[0, 1, 0]
 
 
 def test_contact_at_the_end_of_the_path_may_be_a_miss():
