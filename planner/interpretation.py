@@ -36,6 +36,7 @@ from planner.geometry import point_segment_distance, rotation_matrices, wrap_ang
 from planner.memo import cached_property
 from planner.pose import (
     consistent_set_bounds,
+    consistent_volume,
     fit_batch,
     noise_scales,
     point_bounds,
@@ -173,6 +174,8 @@ class Candidates:
 
 
 _TURN = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90 degrees
+#: Least share of the consistent set a determined pose keeps in its weight.
+_FITNESS_FLOOR = 1e-6
 
 
 def _no_candidates(group_index: int) -> Candidates:
@@ -180,6 +183,38 @@ def _no_candidates(group_index: int) -> Candidates:
     return Candidates(
         group_index, np.zeros(0, np.int64), none, np.zeros((0, 2)), none, none, none, none, none
     )
+
+
+def _fitness(
+    P: np.ndarray,
+    U: np.ndarray,
+    faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    eps_d: float,
+    phi: float,
+) -> np.ndarray:
+    """(K,) volume of the poses consistent with the contacts as measured, over
+    that with the same contacts moved onto the fitted pose's faces: 1 when the
+    contacts fit exactly, less as they lie nearer the edges of their bounds.
+    The bounded-error likelihood (uniform errors) is that volume; the pose's
+    Laplace volume carries the geometry, this ratio the residuals. 1 where the
+    volume is not known (exact sensing, unbounded, or empty when centred). Never
+    below `_FITNESS_FLOOR`: a weight, not a test (a pose consistent only between
+    the sampled rotations keeps a small weight; pruning is the bounds' business)."""
+    normal, offset = faces.normal[face], faces.offset[face]  # (K, s, 2), (K, s)
+    # the fitted pose's faces in the world: n_w . y = d + n_w . t
+    n_w = np.einsum("kij,ksj->ksi", rotation_matrices(theta), normal)
+    d_w = offset + np.einsum("ksi,ki->ks", n_w, t)
+    resid = np.einsum("ksi,si->ks", n_w, P) - d_w
+    centred = P[None] - resid[..., None] * n_w
+    measured = consistent_volume(P, U, normal, offset, assigned, theta, eps_d, phi)
+    ideal = consistent_volume(centred, n_w, normal, offset, assigned, theta, eps_d, phi)
+    known = np.isfinite(measured) & np.isfinite(ideal) & (ideal > 0)
+    ratio = np.clip(measured / np.where(known, ideal, 1.0), _FITNESS_FLOOR, 1.0)
+    return np.where(known, ratio, 1.0)
 
 
 def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
@@ -314,6 +349,7 @@ def evaluate(
     theta = fit.theta[src]
     t = fit.t[src] + s_val[:, None] * fit.slide[src]
     ok = np.ones(len(src), dtype=bool)
+    fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
     if linearized:
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
@@ -341,6 +377,9 @@ def evaluate(
             d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
             # no pose keeps every contact within its bounds: the interpretation is out
             ok[at] &= found.feasible[pos]
+            fitness[at] = _fitness(
+                P, U, faces, face[det], assigned[det], fit.theta[det], fit.t[det], eps_d, phi
+            )[pos]
         eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
         d_translation = moved[:, 0] + cell[src] / 2
     else:
@@ -390,7 +429,7 @@ def evaluate(
     incidence = np.where(a_src, np.abs(np.einsum("nsi,si->ns", world_n, dirs)), 1.0).prod(1)
     volume = np.sqrt(np.maximum(np.linalg.det(fit.cov), 0.0))[src]
     volume = np.where(family[src], volume * cell[src] * span_scale[src] / sigma_d, volume)
-    weight = group.prior * incidence * volume
+    weight = group.prior * incidence * volume * fitness
     weight *= config.outlier_probability ** (~a_src).sum(axis=1)
     if config.likelihood == "gaussian":
         weight *= np.exp(-0.5 * fit.chi2[src])

@@ -512,3 +512,108 @@ def _sweep(
     moved[~some | unknown] = np.inf
     dth[~some | unknown] = np.inf
     return moved, dth, some | unknown
+
+
+def consistent_volume(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    eps_d: float,
+    phi: float,
+    samples: int = 25,
+) -> np.ndarray:
+    """Volume (area x radians) of the set of poses consistent with the contacts,
+    per row (K,): the bounded-error likelihood of the contacts up to a constant
+    (uniform errors within eps_d and phi, uniform prior over the pose).
+
+    theta' runs over the interval the normals allow (as in
+    :func:`consistent_set_bounds`, `samples` points); at each sample the
+    translations keeping every assigned contact within eps_d of its face's posed
+    line form a convex polygon (slabs), whose area is the shoelace sum of its
+    vertices (the slab-edge crossings inside every slab) in angular order; the
+    trapezoid rule integrates over theta'. 0 where nothing is consistent or
+    eps_d is 0; inf where two non-parallel faces are missing (unbounded)."""
+    K, s = assigned.shape
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
+    volume = np.zeros(K)
+    if K == 0 or s < 2 or eps_d <= 0:
+        return np.full(K, np.inf) if s < 2 else volume
+    psi = np.arctan2(normals[..., 1], normals[..., 0])
+    face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
+    r_ang = wrap_angle(psi - face_angle - theta[:, None])
+    lo = np.where(assigned, r_ang - phi, -np.inf).max(axis=1)
+    hi = np.where(assigned, r_ang + phi, np.inf).min(axis=1)
+    pairs = np.array(np.triu_indices(s, 1)).T
+    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    chunk = max(1, 1_000_000 // (samples * len(pairs) * 4 * s))
+    for k0 in range(0, K, chunk):
+        sl = slice(k0, min(K, k0 + chunk))
+        volume[sl] = _volume(
+            points[sl], face_normals[sl], face_offsets[sl], assigned[sl],
+            theta[sl], lo[sl], hi[sl], eps_d, samples, pairs, sides,
+        )  # fmt: skip
+    return volume
+
+
+def _volume(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    eps_d: float,
+    samples: int,
+    pairs: np.ndarray,
+    sides: np.ndarray,
+) -> np.ndarray:
+    """:func:`consistent_volume` on one chunk of rows."""
+    span = np.maximum(hi - lo, 0.0)
+    d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    n = np.einsum("knij,ksj->knsi", R, face_normals)
+    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    i, j = pairs[:, 0], pairs[:, 1]
+    a, b = n[:, :, i], n[:, :, j]
+    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    det = np.where(good, det, 1.0)
+    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
+    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(
+        *det.shape[:2], -1
+    )
+    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(
+        *det.shape[:2], -1
+    )
+    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]  # (K, N, V, s)
+    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
+    inside = np.abs(proj - centre[:, :, None, :]) <= eps_d + tol[:, :, None, :]
+    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
+    bounded = good.any(axis=(1, 2))
+    # the polygon: its vertices in angular order about their mean, shoelace
+    count = ok.sum(axis=-1)
+    mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    my = np.where(ok, vy, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    ang = np.where(ok, np.arctan2(vy - my[..., None], vx - mx[..., None]), np.inf)
+    order = np.argsort(ang, axis=-1)
+    sx = np.take_along_axis(np.where(ok, vx, np.nan), order, axis=-1)
+    sy = np.take_along_axis(np.where(ok, vy, np.nan), order, axis=-1)
+    # close each polygon: the last valid vertex is followed by the first
+    last = np.maximum(count - 1, 0)
+    nx_ = np.roll(sx, -1, axis=-1)
+    ny_ = np.roll(sy, -1, axis=-1)
+    idx = np.arange(sx.shape[-1])
+    wrap = idx == last[..., None]
+    nx_ = np.where(wrap, sx[..., :1], nx_)
+    ny_ = np.where(wrap, sy[..., :1], ny_)
+    cross = np.where(idx < count[..., None], sx * ny_ - sy * nx_, 0.0)
+    area = np.where(count >= 3, np.abs(np.nansum(cross, axis=-1)) / 2, 0.0)  # (K, N)
+    step = span / (samples - 1)
+    volume = (area.sum(axis=1) - (area[:, 0] + area[:, -1]) / 2) * step
+    return np.where(bounded, volume, np.inf)
