@@ -172,6 +172,13 @@ class PlannedPathOut(BaseModel):
         description="refining paths: the probability-weighted error-disk diameter "
         "expected after the touch (length)",
     )
+    p_forecast: float | None = Field(
+        default=None,
+        description="P(DM) as the recognition itself would judge the touch (each "
+        "class' predicted outcome observed); set on the first `strategy.forecast` "
+        "paths, None elsewhere. p_distinguishing is the outcome model's worst-case "
+        "value: sure where it says 1, lower than what happens elsewhere",
+    )
 
 
 class PlanOut(BaseModel):

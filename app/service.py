@@ -65,9 +65,10 @@ from app.store import (
     VersionConflictError,
 )
 from planner.errors import PlannerError
+from planner.forecast import plan_session
 from planner.library import object_from_dict, object_to_dict
 from planner.session import Session
-from planner.strategies import Plan, plan
+from planner.strategies import Plan
 from planner.types import ObjectModel, SensorBounds, Workspace
 
 __all__ = ["Answer", "SessionService"]
@@ -436,16 +437,7 @@ class SessionService:
         rng = plan_rng(record.id, record.version, cfg["strategy"].get("seed"))
         sensor_position = cfg["sensor_position"] if position is None else list(position)
         result = await self.run_cpu(
-            lambda: plan(
-                session.hypotheses,
-                session.models,
-                session.sensor,
-                session.workspace,
-                sensor_position,
-                strategy_config(cfg),
-                rng,
-                observations=session.observations,
-            )
+            lambda: plan_session(session, sensor_position, strategy_config(cfg), rng)
         )
         self.plans.put(key, result)
         return result

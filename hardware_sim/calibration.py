@@ -1,11 +1,13 @@
 """Calibration of the planner's P(DM) against simulated touches (DESIGN §4.7).
 
-Every planned touch after the opening carries the planner's predicted
+Every planned touch after the opening carries two predictions of the
 probability that it is a distinguishing measurement (one equivalence class
-left afterwards). Over many simulated touches, grouped in bins of the
-prediction, the observed share of distinguishing touches should match the
-bin's mean prediction: within `tolerance` (0.05) for every bin holding at least
-`min_count` (100) touches.
+left afterwards): the outcome model's worst-case `p_distinguishing` and the
+recognition's own `p_forecast` (:mod:`planner.forecast`). Both are tabled; the
+check judges the forecast, the probability the planner offers as such. Over
+many simulated touches, grouped in bins of the prediction, the observed share
+of distinguishing touches should match the bin's mean prediction: within
+`tolerance` (0.05) for every bin holding at least `min_count` (100) touches.
 
 Run it::
 
@@ -34,7 +36,14 @@ from hardware_sim.experiments import (
 from hardware_sim.presets import PRESETS, resolve_preset
 from planner.strategies import STRATEGIES
 
-__all__ = ["ReliabilityBin", "calibration_ok", "main", "reliability_table", "touch_records"]
+__all__ = [
+    "PREDICTIONS",
+    "ReliabilityBin",
+    "calibration_ok",
+    "main",
+    "reliability_table",
+    "touch_records",
+]
 
 
 @dataclass(frozen=True)
@@ -52,12 +61,22 @@ class ReliabilityBin:
     ok: bool | None
 
 
-def touch_records(results: Sequence[TrialResult]) -> tuple[np.ndarray, np.ndarray]:
+#: Which prediction a touch is judged by: the recognition's forecast, or the
+#: outcome model's worst-case P(DM).
+PREDICTIONS = ("forecast", "model")
+
+
+def touch_records(
+    results: Sequence[TrialResult], prediction: str = "forecast"
+) -> tuple[np.ndarray, np.ndarray]:
     """(predicted P(DM), observed distinguishing) of every planned touch that had
-    a prediction (the opening probes have none)."""
+    a prediction of that kind (the opening probes have none)."""
+    if prediction not in PREDICTIONS:
+        raise ValueError(f"prediction must be one of {list(PREDICTIONS)}")
     pred, obs = [], []
     for r in results:
-        for p, d in zip(r.p_distinguishing, r.distinguishing, strict=True):
+        made = r.p_forecast if prediction == "forecast" else r.p_distinguishing
+        for p, d in zip(made, r.distinguishing, strict=True):
             if p is not None:
                 pred.append(p)
                 obs.append(d)
@@ -123,29 +142,37 @@ def main(argv: Sequence[str] | None = None) -> int:
     update, close = _progress_bar(spec.trials * len(spec.strategies))
     results = run_experiment(spec, args.workers, None, update)
     close()
-    pred, obs = touch_records(results)
     timeouts = sum(r.status == "timeout" for r in results)
-    table = reliability_table(pred, obs, args.bins, args.tolerance, args.min_count)
-    ok = calibration_ok(table)
+    tables = {}
+    for kind in PREDICTIONS:
+        pred, obs = touch_records(results, kind)
+        table = reliability_table(pred, obs, args.bins, args.tolerance, args.min_count)
+        tables[kind] = (len(pred), table)
+    ok = calibration_ok(tables["forecast"][1])  # the forecast is the probability offered
     if args.json:
-        bins = [asdict(b) for b in table]
-        print(json.dumps({"touches": len(pred), "timeouts": timeouts, "ok": ok, "bins": bins}))
+        out = {
+            kind: {"touches": n, "ok": calibration_ok(t), "bins": [asdict(b) for b in t]}
+            for kind, (n, t) in tables.items()
+        }
+        print(json.dumps({"timeouts": timeouts, "ok": ok, **out}))
         return 0 if ok else 1
     print(
-        f"{args.objects}, sensor {args.sensor}, strategies {', '.join(spec.strategies)}: "
-        f"{len(pred)} planned touches with a predicted P(DM)"
+        f"{args.objects}, sensor {args.sensor}, strategies {', '.join(spec.strategies)}"
         + (f" ({timeouts} trials stopped at the trial timeout, left out)" if timeouts else "")
     )
-    print("  P(DM) bin     touches  mean predicted  observed  |diff|  check")
-    for b in table:
-        check = "-" if b.ok is None else ("ok" if b.ok else "OFF")
-        diff = abs(b.observed - b.mean_predicted) if b.count else math.nan
-        print(
-            f"  [{b.low:.1f}, {b.high:.1f})  {b.count:8d}  {b.mean_predicted:14.3f}  "
-            f"{b.observed:8.3f}  {diff:6.3f}  {check}"
-        )
+    for kind, (n, table) in tables.items():
+        title = "forecast (p_forecast)" if kind == "forecast" else "model (p_distinguishing)"
+        print(f"{title}: {n} planned touches with a prediction")
+        print("  P(DM) bin     touches  mean predicted  observed  |diff|  check")
+        for b in table:
+            check = "-" if b.ok is None else ("ok" if b.ok else "OFF")
+            diff = abs(b.observed - b.mean_predicted) if b.count else math.nan
+            print(
+                f"  [{b.low:.1f}, {b.high:.1f})  {b.count:8d}  {b.mean_predicted:14.3f}  "
+                f"{b.observed:8.3f}  {diff:6.3f}  {check}"
+            )
     print(
-        "calibrated" if ok else "NOT calibrated",
+        "forecast calibrated" if ok else "forecast NOT calibrated",
         f"(tolerance {args.tolerance}, bins with >= {args.min_count} touches)",
     )
     return 0 if ok else 1

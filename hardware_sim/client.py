@@ -4,7 +4,7 @@ The loop (:func:`run_recognition`) talks to two boundaries only:
 
 - a :class:`RecognitionService`, the planner side: "what next?" and "here is
   what the probe found". :class:`InProcessService` calls the planner library
-  directly (``planner.session.Session`` + ``planner.strategies.plan``);
+  directly (``planner.session.Session`` + ``planner.forecast.plan_session``);
   :class:`hardware_sim.http_service.HttpService` asks a running service through
   the generated client (``hardware_sim.api_client``);
 - a :class:`hardware_sim.protocol.Probe`, the hardware side.
@@ -33,9 +33,10 @@ from typing import Protocol
 import numpy as np
 
 from hardware_sim.protocol import Probe
+from planner.forecast import plan_session
 from planner.interpretation import RecognitionConfig
 from planner.session import Session
-from planner.strategies import StrategyConfig, plan
+from planner.strategies import StrategyConfig
 from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
 
 __all__ = [
@@ -59,8 +60,9 @@ class Advice:
     (None when there is nothing to do or nothing informative), its predicted
     `p_distinguishing` (None for the opening probe, before any hypothesis),
     planning time `plan_ms`, `truncated` (the time budget stopped the search),
-    the planner's `note`, and `expected_remaining`, the expected touches still
-    needed when taking the path, itself included (None when unknown)."""
+    the planner's `note`, `expected_remaining`, the expected touches still
+    needed when taking the path, itself included (None when unknown), and
+    `p_forecast`, the recognition's own forecast of P(DM) (None when not made)."""
 
     status: str
     path: SensingPath | None
@@ -69,6 +71,7 @@ class Advice:
     truncated: bool = False
     note: str | None = None
     expected_remaining: float | None = None
+    p_forecast: float | None = None
 
 
 @dataclass(frozen=True)
@@ -146,16 +149,7 @@ class InProcessService:
         rng = self.rng
         if self.seed is not None:
             rng = np.random.default_rng([self.seed, 1 + len(s.observations)])
-        result = plan(
-            s.hypotheses,
-            s.models,
-            s.sensor,
-            s.workspace,
-            sensor_position,
-            self.strategy,
-            rng,
-            observations=s.observations,
-        )
+        result = plan_session(s, sensor_position, self.strategy, rng)
         best = result.best
         return Advice(
             status=result.status,
@@ -165,6 +159,7 @@ class InProcessService:
             truncated=result.truncated,
             note=result.note,
             expected_remaining=None if best is None else best.expected_remaining,
+            p_forecast=None if best is None else best.p_forecast,
         )
 
     def observe(self, observation: Observation) -> Update:

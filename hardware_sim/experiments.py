@@ -103,8 +103,9 @@ class ExperimentSpec:
 class TrialResult:
     """One recognition: `touches` executed, final `status`, `success`, the pose
     error (Hausdorff distance of posed vertex sets, length; inf when wrong),
-    per-step planning time (ms), predicted P(DM) (None for the opening probe)
-    and whether the step was distinguishing, and the rig's travel."""
+    per-step planning time (ms), predicted P(DM) by the outcome model and by the
+    recognition's forecast (None for the opening probe, or not forecast) and
+    whether the step was distinguishing, and the rig's travel."""
 
     strategy: str
     trial: int
@@ -115,6 +116,7 @@ class TrialResult:
     pose_error: float
     plan_ms: tuple[float, ...]
     p_distinguishing: tuple[float | None, ...]
+    p_forecast: tuple[float | None, ...]
     distinguishing: tuple[bool, ...]
     distance: float
     time: float
@@ -178,7 +180,19 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
             rec = run_recognition(service, arm, spec.max_touches)
     except _TrialTimeoutError:
         return TrialResult(
-            strategy, trial, world.model.name, 0, "timeout", False, math.inf, (), (), (), 0.0, 0.0
+            strategy,
+            trial,
+            world.model.name,
+            0,
+            "timeout",
+            False,
+            math.inf,
+            (),
+            (),
+            (),
+            (),
+            0.0,
+            0.0,
         )
     error = math.inf
     success = False
@@ -196,6 +210,7 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
         pose_error=error,
         plan_ms=tuple(s.advice.plan_ms for s in rec.steps),
         p_distinguishing=tuple(s.advice.p_distinguishing for s in rec.steps),
+        p_forecast=tuple(s.advice.p_forecast for s in rec.steps),
         distinguishing=tuple(s.distinguishing for s in rec.steps),
         distance=rec.distance,
         time=rec.time,

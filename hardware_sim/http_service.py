@@ -308,6 +308,7 @@ class HttpService:
             truncated=plan.truncated,
             note=_opt(plan.note),
             expected_remaining=None if best is None else best.expected_remaining,
+            p_forecast=None if opening else _opt(best.p_forecast),
         )
 
     def observe(self, observation: Observation) -> Update:

@@ -46,7 +46,11 @@ class PlannedPath:
     lower bound of the deeper value; `motion_cost` the arc along
     the safe circle from the sensor plus the expected approach length;
     `source` where the candidate came from (opening, probe, random, window,
-    intersection, boundary, extra)."""
+    intersection, boundary, extra); `p_forecast` the probability of a
+    distinguishing measurement as the recognition itself would judge the touch
+    (:mod:`planner.forecast`; None where not forecast), against `p_distinguishing`,
+    the outcome model's worst-case value, which is sound where it says 1 and
+    lower than what happens elsewhere."""
 
     origin: tuple[float, float]
     direction: tuple[float, float]
@@ -60,6 +64,7 @@ class PlannedPath:
     motion_cost: float
     source: str = "general"
     expected_eps_t: float | None = None
+    p_forecast: float | None = None
 
     @property
     def path(self) -> SensingPath:
@@ -80,6 +85,7 @@ class PlannedPath:
             "motion_cost": _finite(self.motion_cost),
             "source": self.source,
             "expected_eps_t": _finite(self.expected_eps_t),
+            "p_forecast": _finite(self.p_forecast),
         }
 
 

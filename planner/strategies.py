@@ -98,7 +98,8 @@ class StrategyConfig:
     `thesis_choice` (how ``thesis`` picks among the windows of the lowest admitted
     strength: ``choose``, the nearest origin, as the thesis' hardware did (ch. 5),
     or ``random``, as its simulations did (§4.3.6)), and the candidate and outcome
-    settings."""
+    settings. `forecast` is how many of the ranked paths a session-aware caller
+    has the recognition forecast (:mod:`planner.forecast`; 0: none)."""
 
     name: str = "lookahead"
     depth: int = 2
@@ -109,6 +110,7 @@ class StrategyConfig:
     random_draws: int = 16
     grid_size: int = 70
     thesis_choice: str = "choose"
+    forecast: int = 1
     candidates: CandidateConfig = field(default_factory=CandidateConfig)
     outcome: OutcomeConfig = field(default_factory=OutcomeConfig)
 
@@ -124,6 +126,8 @@ class StrategyConfig:
             raise PlannerError(
                 f"must be one of {list(THESIS_CHOICES)}", field="strategy.thesis_choice"
             )
+        if self.forecast < 0:
+            raise PlannerError("must be >= 0", field="strategy.forecast")
         if self.optimal_max_classes < 1:
             raise PlannerError("must be >= 1", field="strategy.optimal_max_classes")
         if self.budget_ms is not None and not (

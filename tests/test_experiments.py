@@ -140,7 +140,7 @@ def test_histogram_follows_table_4_1():
 def test_summary_charges_unlocalized_trials_the_touch_limit():
     def trial(touches, status, ok):
         return TrialResult(
-            "pdm", 0, "ell", touches, status, ok, 0.0, (1.0,) * touches, (), (), 0.0, 0.0
+            "pdm", 0, "ell", touches, status, ok, 0.0, (1.0,) * touches, (), (), (), 0.0, 0.0
         )
 
     rows = summarize([trial(2, "localized", True), trial(3, "inconsistent", False)], ["pdm"], 8)
@@ -295,10 +295,13 @@ def test_reliability_table_bins_and_judges():
 
 
 def test_touch_records_skip_the_opening(sequential_results):
-    pred, obs = touch_records(sequential_results)
     planned = sum(len(r.p_distinguishing) for r in sequential_results)
-    assert 0 < len(pred) < planned
-    assert np.all((pred >= 0) & (pred <= 1)) and obs.dtype == bool
+    for kind in ("forecast", "model"):
+        pred, obs = touch_records(sequential_results, kind)
+        assert 0 < len(pred) < planned
+        assert np.all((pred >= 0) & (pred <= 1)) and obs.dtype == bool
+    with pytest.raises(ValueError, match="prediction"):
+        touch_records(sequential_results, "guess")
 
 
 def test_public_names_exist():

@@ -37,6 +37,9 @@ class PlannedPathOut:
             p_informative (float):
             expected_eps_t (float | None | Unset): refining paths: the probability-weighted error-disk diameter expected
                 after the touch (length)
+            p_forecast (float | None | Unset): P(DM) as the recognition itself would judge the touch (each class' predicted
+                outcome observed); set on the first `strategy.forecast` paths, None elsewhere. p_distinguishing is the outcome
+                model's worst-case value: sure where it says 1, lower than what happens elsewhere
             source (None | str | Unset):
      """
 
@@ -51,6 +54,7 @@ class PlannedPathOut:
     p_distinguishing: float
     p_informative: float
     expected_eps_t: float | None | Unset = UNSET
+    p_forecast: float | None | Unset = UNSET
     source: None | str | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
@@ -93,6 +97,12 @@ class PlannedPathOut:
         else:
             expected_eps_t = self.expected_eps_t
 
+        p_forecast: float | None | Unset
+        if isinstance(self.p_forecast, Unset):
+            p_forecast = UNSET
+        else:
+            p_forecast = self.p_forecast
+
         source: None | str | Unset
         if isinstance(self.source, Unset):
             source = UNSET
@@ -116,6 +126,8 @@ class PlannedPathOut:
         })
         if expected_eps_t is not UNSET:
             field_dict["expected_eps_t"] = expected_eps_t
+        if p_forecast is not UNSET:
+            field_dict["p_forecast"] = p_forecast
         if source is not UNSET:
             field_dict["source"] = source
 
@@ -171,6 +183,16 @@ class PlannedPathOut:
         expected_eps_t = _parse_expected_eps_t(d.pop("expected_eps_t", UNSET))
 
 
+        def _parse_p_forecast(data: object) -> float | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(float | None | Unset, data)
+
+        p_forecast = _parse_p_forecast(d.pop("p_forecast", UNSET))
+
+
         def _parse_source(data: object) -> None | str | Unset:
             if data is None:
                 return data
@@ -193,6 +215,7 @@ class PlannedPathOut:
             p_distinguishing=p_distinguishing,
             p_informative=p_informative,
             expected_eps_t=expected_eps_t,
+            p_forecast=p_forecast,
             source=source,
         )
 
