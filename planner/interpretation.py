@@ -35,6 +35,7 @@ from planner.constraints import (
 from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
 from planner.memo import cached_property
 from planner.pose import (
+    consistent_poses,
     consistent_set_bounds,
     consistent_volume,
     fit_batch,
@@ -217,6 +218,56 @@ def _fitness(
     return np.where(known, ratio, 1.0)
 
 
+def _admitted_share(
+    group: Group,
+    observations: list[Observation],
+    P: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    valid: np.ndarray,
+    eps_d: float,
+    floor: float,
+) -> np.ndarray:
+    """(K,) share of the poses spread over each row's consistent set (`theta`,
+    `t`, `valid`: (K, M), (K, M, 2), (K, M)) whose contacts lie within eps_d of
+    their FINITE faces and whose paths (up to each contact less eps_d, or whole
+    when missed) stay out of the outline: the model check without the pose's
+    error allowance. It weighs, it does not prune (at least `_FITNESS_FLOOR`;
+    1 where no pose is spread)."""
+    K, M = valid.shape
+    faces = group.stable.faces
+    R = rotation_matrices(theta.reshape(-1)).reshape(K, M, 2, 2)
+    start = np.einsum("kmij,ksj->kmsi", R, faces.start[face]) + t[:, :, None, :]
+    end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None, :]
+    dist = point_segment_distance(P[None, None], start, end)  # (K, M, s)
+    good = valid & np.all(~assigned[:, None, :] | (dist <= eps_d + floor), axis=-1)
+    flat_theta, flat_t = theta.reshape(-1), t.reshape(-1, 2)
+    shrink = np.full(K * M, floor)
+    contact_col = 0
+    for obs in observations:
+        o, d = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
+        if obs.contact is None:
+            reach_len = obs.path.length
+            mine = np.ones(K, dtype=bool)
+        else:
+            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - eps_d
+            mine = assigned[:, contact_col]
+            contact_col += 1
+        idx = np.flatnonzero((good & mine[:, None]).reshape(-1))
+        if idx.size:
+            clear = _free_space_ok(
+                group, flat_theta[idx], flat_t[idx], shrink[idx], o, d, reach_len, floor
+            )
+            g = good.reshape(-1)
+            g[idx] &= clear
+            good = g.reshape(K, M)
+    count = valid.sum(axis=1)
+    share = good.sum(axis=1) / np.maximum(count, 1)
+    return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
+
+
 def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
     """Round tolerances UP onto a geometric grid (sound: a larger shrink is more lenient)."""
     tol = np.maximum(tol, floor)
@@ -350,6 +401,7 @@ def evaluate(
     t = fit.t[src] + s_val[:, None] * fit.slide[src]
     ok = np.ones(len(src), dtype=bool)
     fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
+    spread, spread_rows = None, None  # poses spread over each determined row's consistent set
     if linearized:
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
@@ -380,6 +432,17 @@ def evaluate(
             fitness[at] = _fitness(
                 P, U, faces, face[det], assigned[det], fit.theta[det], fit.t[det], eps_d, phi
             )[pos]
+            spread = consistent_poses(
+                P,
+                U,
+                faces.normal[face[det]],
+                faces.offset[face[det]],
+                assigned[det],
+                fit.theta[det],
+                eps_d,
+                phi,
+            )
+            spread_rows = (at, pos)
         eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
         d_translation = moved[:, 0] + cell[src] / 2
     else:
@@ -421,6 +484,25 @@ def evaluate(
         if idx.size:
             ok[idx] &= _free_space_ok(
                 group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor
+            )
+
+    # determined poses: the share of their consistent set that also keeps every
+    # contact on its finite face and every path clear of the outline, exactly
+    if spread is not None:
+        at, pos = spread_rows
+        live = np.flatnonzero(ok[at])
+        if live.size:
+            fitness[at[live]] *= _admitted_share(
+                group,
+                observations,
+                P,
+                face[src[at[live]]],
+                assigned[src[at[live]]],
+                spread[0][pos[live]],
+                spread[1][pos[live]],
+                spread[2][pos[live]],
+                eps_d,
+                floor,
             )
 
     # weight = prior x incidence likelihood x pose volume (x Gaussian residual term)

@@ -24,6 +24,7 @@ allowance covers the linearization.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 import numpy as np
@@ -542,21 +543,68 @@ def consistent_volume(
     volume = np.zeros(K)
     if K == 0 or s < 2 or eps_d <= 0:
         return np.full(K, np.inf) if s < 2 else volume
+    lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
+    chunk = max(1, 1_000_000 // (samples * s * s * 2 * s))
+    for k0 in range(0, K, chunk):
+        sl = slice(k0, min(K, k0 + chunk))
+        volume[sl] = _volume(
+            points[sl], face_normals[sl], face_offsets[sl], assigned[sl],
+            theta[sl], lo[sl], hi[sl], eps_d, samples,
+        )  # fmt: skip
+    return volume
+
+
+def _theta_interval(
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    phi: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (K,): the rotations from the fit that keep every assigned measured
+    normal within phi of its face's posed normal (hi < lo: none)."""
     psi = np.arctan2(normals[..., 1], normals[..., 0])
     face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
     r_ang = wrap_angle(psi - face_angle - theta[:, None])
     lo = np.where(assigned, r_ang - phi, -np.inf).max(axis=1)
     hi = np.where(assigned, r_ang + phi, np.inf).min(axis=1)
+    return lo, hi
+
+
+def _polygons(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    d_theta: np.ndarray,
+    eps_d: float,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The consistent translations at rotations ``theta + d_theta`` (K, N): the
+    convex polygon where every used contact lies within eps_d of its face's posed
+    line, as its candidate vertices (slab-edge crossings) `vx`, `vy` (K, N, V),
+    `ok` (K, N, V) for those inside every slab, and `bounded` (K,)."""
+    s = use.shape[1]
     pairs = np.array(np.triu_indices(s, 1)).T
     sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
-    chunk = max(1, 1_000_000 // (samples * len(pairs) * 4 * s))
-    for k0 in range(0, K, chunk):
-        sl = slice(k0, min(K, k0 + chunk))
-        volume[sl] = _volume(
-            points[sl], face_normals[sl], face_offsets[sl], assigned[sl],
-            theta[sl], lo[sl], hi[sl], eps_d, samples, pairs, sides,
-        )  # fmt: skip
-    return volume
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    n = np.einsum("knij,ksj->knsi", R, face_normals)
+    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    i, j = pairs[:, 0], pairs[:, 1]
+    a, b = n[:, :, i], n[:, :, j]
+    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    det = np.where(good, det, 1.0)
+    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
+    shape = (*det.shape[:2], -1)
+    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
+    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
+    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
+    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
+    inside = np.abs(proj - centre[:, :, None, :]) <= eps_d + tol[:, :, None, :]
+    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
+    return vx, vy, ok, good.any(axis=(1, 2))
 
 
 def _volume(
@@ -569,33 +617,11 @@ def _volume(
     hi: np.ndarray,
     eps_d: float,
     samples: int,
-    pairs: np.ndarray,
-    sides: np.ndarray,
 ) -> np.ndarray:
     """:func:`consistent_volume` on one chunk of rows."""
     span = np.maximum(hi - lo, 0.0)
     d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)
-    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
-    n = np.einsum("knij,ksj->knsi", R, face_normals)
-    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
-    i, j = pairs[:, 0], pairs[:, 1]
-    a, b = n[:, :, i], n[:, :, j]
-    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
-    det = np.where(good, det, 1.0)
-    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
-    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(
-        *det.shape[:2], -1
-    )
-    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(
-        *det.shape[:2], -1
-    )
-    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]  # (K, N, V, s)
-    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
-    inside = np.abs(proj - centre[:, :, None, :]) <= eps_d + tol[:, :, None, :]
-    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
-    bounded = good.any(axis=(1, 2))
+    vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, eps_d)
     # the polygon: its vertices in angular order about their mean, shoelace
     count = ok.sum(axis=-1)
     mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
@@ -606,14 +632,59 @@ def _volume(
     sy = np.take_along_axis(np.where(ok, vy, np.nan), order, axis=-1)
     # close each polygon: the last valid vertex is followed by the first
     last = np.maximum(count - 1, 0)
-    nx_ = np.roll(sx, -1, axis=-1)
-    ny_ = np.roll(sy, -1, axis=-1)
     idx = np.arange(sx.shape[-1])
     wrap = idx == last[..., None]
-    nx_ = np.where(wrap, sx[..., :1], nx_)
-    ny_ = np.where(wrap, sy[..., :1], ny_)
+    nx_ = np.where(wrap, sx[..., :1], np.roll(sx, -1, axis=-1))
+    ny_ = np.where(wrap, sy[..., :1], np.roll(sy, -1, axis=-1))
     cross = np.where(idx < count[..., None], sx * ny_ - sy * nx_, 0.0)
     area = np.where(count >= 3, np.abs(np.nansum(cross, axis=-1)) / 2, 0.0)  # (K, N)
     step = span / (samples - 1)
     volume = (area.sum(axis=1) - (area[:, 0] + area[:, -1]) / 2) * step
     return np.where(bounded, volume, np.inf)
+
+
+@functools.lru_cache(maxsize=32)
+def _mix(vertices: int, count: int = 8) -> np.ndarray:
+    """Fixed mixing weights of the consistent-set samples (recognition must be a
+    function of its inputs): `count` Dirichlet(1, ..., 1) draws over `vertices`."""
+    return np.random.default_rng(vertices).dirichlet(np.ones(vertices), size=count)
+
+
+def consistent_poses(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    eps_d: float,
+    phi: float,
+    rotations: int = 4,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poses spread over the set consistent with the contacts, per row: at
+    `rotations` rotations across the interval the normals allow (cell midpoints),
+    fixed convex mixtures of the polygon's vertices (inside it, the polygon
+    being convex). Returns theta' (K, M), t' (K, M, 2) and `valid` (K, M) (False
+    where the polygon is empty or unbounded)."""
+    K, s = assigned.shape
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
+    lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
+    span = np.maximum(hi - lo, 0.0)
+    d_theta = lo[:, None] + span[:, None] * (np.arange(rotations) + 0.5) / rotations
+    vx, vy, ok, bounded = _polygons(
+        points, face_normals, face_offsets, assigned, theta, d_theta, eps_d
+    )
+    V = vx.shape[-1]
+    mix = _mix(V)[None, None] * ok[:, :, None, :]  # (K, N, S, V)
+    total = mix.sum(axis=-1)
+    mix = mix / np.where(total > 0, total, 1.0)[..., None]
+    tx = np.einsum("knsv,knv->kns", mix, np.where(ok, vx, 0.0))
+    ty = np.einsum("knsv,knv->kns", mix, np.where(ok, vy, 0.0))
+    valid = (total > 0) & bounded[:, None, None] & (hi >= lo)[:, None, None]
+    th = np.broadcast_to((theta[:, None] + d_theta)[:, :, None], tx.shape)
+    return (
+        th.reshape(K, -1),
+        np.stack([tx, ty], axis=-1).reshape(K, -1, 2),
+        valid.reshape(K, -1),
+    )

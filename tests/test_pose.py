@@ -10,7 +10,15 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
-from planner.pose import PoseFilter, consistent_set_bounds, fit_batch, noise_scales
+from planner.geometry import rotation_matrices
+from planner.pose import (
+    PoseFilter,
+    consistent_poses,
+    consistent_set_bounds,
+    consistent_volume,
+    fit_batch,
+    noise_scales,
+)
 from planner.types import Pose, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
 
@@ -146,3 +154,52 @@ def test_consistent_set_bound_covers_the_true_pose(name, seed, count):
     assert found.feasible[0]
     assert np.all(true_move <= found.moved[0] + 1e-6)
     assert abs(math.remainder(world.pose.theta - fit.theta[0], 2 * math.pi)) <= found.dtheta[0]
+
+
+def test_consistent_volume_of_two_square_touches():
+    # contacts on perpendicular faces x = 0 and y = 0: at every rotation the
+    # translations form a 2 eps_d square, over a rotation interval of 2 phi
+    normals = np.array([[[-1.0, 0.0], [0.0, -1.0]]])
+    points = np.array([[[0.0, 0.5], [0.5, 0.0]]])
+    eps_d, phi = 0.1, 0.05
+    volume = consistent_volume(
+        points, normals, normals, np.zeros((1, 2)), np.ones((1, 2), bool), np.zeros(1), eps_d, phi
+    )
+    np.testing.assert_allclose(volume, 4 * eps_d**2 * 2 * phi, rtol=1e-9)
+    # a normal off by phi / 2 narrows the rotation interval to 1.5 phi
+    off = normals.copy()
+    off[0, 0] = [-math.cos(phi / 2), -math.sin(phi / 2)]
+    narrowed = consistent_volume(
+        points, off, normals, np.zeros((1, 2)), np.ones((1, 2), bool), np.zeros(1), eps_d, phi
+    )
+    np.testing.assert_allclose(narrowed, 4 * eps_d**2 * 1.5 * phi, rtol=1e-9)
+    parallel = np.array([[[-1.0, 0.0], [-1.0, 0.0]]])
+    unbounded = consistent_volume(
+        points, parallel, parallel, np.zeros((1, 2)), np.ones((1, 2), bool), np.zeros(1), eps_d, phi
+    )
+    assert np.isinf(unbounded).all()
+
+
+@pytest.mark.parametrize("name", ["thesis_like", "workshop"])
+@settings(max_examples=15, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(2, 5))
+def test_consistent_poses_keep_every_contact_within_its_bounds(name, seed, count):
+    # errors of at most half the bounds: the consistent set has room inside
+    bounds, noise = SensorBounds(1.0, math.radians(5)), SensorBounds(0.5, math.radians(2.5))
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    obs, faces = _touches(world, noise, rng, count)
+    fit = _fit(world, obs, faces, bounds)
+    points, normals, face_normals, face_offsets = _arrays(world, obs, faces)
+    assigned = np.ones((1, len(obs)), bool)
+    eps_d, phi = bounds.position_error, bounds.normal_error
+    theta, t, valid = consistent_poses(
+        points, normals, face_normals, face_offsets, assigned, fit.theta, eps_d, phi
+    )
+    assert valid.any()
+    R = rotation_matrices(theta[valid])  # (M, 2, 2)
+    n = np.einsum("mij,sj->msi", R, face_normals[0])
+    gap = np.einsum("msi,si->ms", n, points) - np.einsum("msi,mi->ms", n, t[valid])
+    assert np.all(np.abs(gap - face_offsets[0]) <= eps_d + 1e-9)
+    ang = np.arctan2(normals[:, 1], normals[:, 0]) - np.arctan2(n[..., 1], n[..., 0])
+    assert np.all(np.abs(np.remainder(ang + math.pi, 2 * math.pi) - math.pi) <= phi + 1e-9)
