@@ -138,6 +138,8 @@ def main(argv: Sequence[str] | None = None) -> int:
         max_touches=args.max_touches,
         truth=args.truth,
         trial_timeout=args.trial_timeout,
+        # the predictions are measured, not the speed: no time budget cuts a plan
+        strategy={"budget_ms": None},
     )
     update, close = _progress_bar(spec.trials * len(spec.strategies))
     results = run_experiment(spec, args.workers, None, update)
