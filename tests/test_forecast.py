@@ -10,25 +10,18 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hardware_sim.world import random_world
 from planner.forecast import forecast_distinguishing, plan_session, with_forecast
 from planner.session import Session
-from planner.strategies import StrategyConfig, analyse
+from planner.strategies import StrategyConfig
 from planner.types import SensingPath, SensorBounds
-from tests.conftest import WORKSPACE, object_set
+from tests.conftest import WORKSPACE, analysed, object_set, touched_session
 
 BOUNDS = [SensorBounds(0.0, 0.0), SensorBounds(1.0, math.radians(3))]
 SENSOR = (WORKSPACE.radius, 0.0)
 
 
 def touched(name: str, bounds: SensorBounds, seed: int, touches: int) -> Session:
-    rng = np.random.default_rng(seed)
-    models = object_set(name)
-    world = random_world(models, WORKSPACE, rng)
-    session = Session(models, bounds, WORKSPACE)
-    for _ in range(touches):
-        session = session.observe(world.execute(world.hitting_path(rng), bounds, rng)[0])
-    return session
+    return touched_session(name, bounds, seed, touches)[1]
 
 
 @pytest.mark.parametrize("name", ["thesis_like", "symmetric"])
@@ -41,16 +34,7 @@ def test_a_path_sure_to_distinguish_is_forecast_so(name, bounds, seed, touches):
     classes = {h.equivalence_class for h in session.hypotheses}
     if session.status != "ambiguous" or len(classes) > 24:
         return
-    found = analyse(
-        session.hypotheses,
-        session.models,
-        session.sensor,
-        session.workspace,
-        SENSOR,
-        StrategyConfig(budget_ms=None),
-        0,
-        observations=session.observations,
-    )
+    found = analysed(session)
     c = found.candidates
     before = session.hypotheses
     for i in np.argsort(-found.info.p_distinguishing, kind="stable")[:3]:

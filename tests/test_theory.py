@@ -9,11 +9,8 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
-from hardware_sim.world import random_world
-from planner.session import Session
-from planner.strategies import StrategyConfig, analyse
 from planner.types import SensingPath, SensorBounds
-from tests.conftest import SET_NAMES, WORKSPACE, object_set
+from tests.conftest import SET_NAMES, analysed, touched_session
 
 BOUNDS = [SensorBounds(0.0, 0.0), SensorBounds(1.0, math.radians(3))]
 
@@ -24,24 +21,10 @@ BOUNDS = [SensorBounds(0.0, 0.0), SensorBounds(1.0, math.radians(3))]
 @given(seed=st.integers(0, 2**32 - 1), touches=st.integers(2, 3))
 def test_a_path_sure_to_distinguish_leaves_one_class(name, bounds, seed, touches):
     # any error within the bounds, on the true object: the session is then localized
-    rng = np.random.default_rng(seed)
-    models = object_set(name)
-    world = random_world(models, WORKSPACE, rng)
-    session = Session(models, bounds, WORKSPACE)
-    for _ in range(touches):
-        session = session.observe(world.execute(world.hitting_path(rng), bounds, rng)[0])
+    world, session, rng = touched_session(name, bounds, seed, touches)
     if session.status != "ambiguous":
         return
-    found = analyse(
-        session.hypotheses,
-        session.models,
-        session.sensor,
-        session.workspace,
-        (WORKSPACE.radius, 0.0),
-        StrategyConfig(budget_ms=None),
-        0,
-        observations=session.observations,
-    )
+    found = analysed(session)
     c = found.candidates
     for i in np.flatnonzero(found.info.p_distinguishing >= 1 - 1e-9)[:4]:
         path = SensingPath(tuple(c.origins[i]), tuple(c.directions[i]), float(c.lengths[i]))
