@@ -396,6 +396,14 @@ def plan(
         paths, note = _refining(
             found, hypotheses, _models(models), contacts, sensor, ranking, config
         )
+    windows = np.flatnonzero(found.candidates.source == "window")
+    if not paths and config.name == "thesis" and len(windows):
+        # the thesis takes its best window whatever a finer model predicts of it
+        if config.thesis_choice == "random":
+            tier = found.candidates.tier[windows]
+            windows = gen.permutation(windows[tier == tier.min()])
+        paths = [_planned(found, int(windows[0]), ranking)]
+        note = "; ".join(filter(None, [note, "the thesis' best window, though not informative"]))
     if found.truncated:
         note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
     return finish(

@@ -25,13 +25,17 @@ from hardware_sim.experiments import (
     BINS,
     ExperimentSpec,
     TrialResult,
+    _load,
+    _seed,
     histogram,
     run_experiment,
+    run_trial,
     summarize,
 )
 from hardware_sim.presets import PRESETS, build_arm
 from hardware_sim.protocol import ProbeResult
 from hardware_sim.world import World, random_world
+from planner.interpretation import RecognitionConfig
 from planner.library import dump_objects, object_from_dict
 from planner.plans import opening_path
 from planner.strategies import StrategyConfig
@@ -309,3 +313,27 @@ def test_public_names_exist():
         for name in module.__all__:
             assert hasattr(module, name)
     assert "thesis_sensor" in PRESETS
+
+
+def test_thesis_in_its_own_setting_takes_its_window_where_nothing_is_informative():
+    # the thesis' fixed 10% disk: the outcome model finds no informative path, the
+    # thesis' window is taken all the same (as the thesis did) and the block is found
+    models = _load("bump_block")
+    rc = {"bound_mode": "thesis", "thesis_fraction": 0.1}
+    spec = ExperimentSpec(tuple(models), ("thesis",), 1, placement="centred", recognition=rc)
+    world = random_world(
+        models, spec.workspace, np.random.default_rng(_seed(spec, 0, 0)), "centred"
+    )
+    service = InProcessService(
+        models,
+        spec.preset.bounds,
+        spec.workspace,
+        StrategyConfig(name="thesis", budget_ms=None),
+        RecognitionConfig(**rc),
+        rng=np.random.default_rng(_seed(spec, 0, 2)),
+    )
+    rec = run_recognition(service, build_arm(world, spec.preset, _seed(spec, 0, 1)), 20)
+    notes = [s.advice.note or "" for s in rec.steps]
+    assert any("thesis' best window, though not informative" in n for n in notes)
+    assert rec.status == "localized"
+    assert run_trial(spec, "thesis", 0).success
