@@ -157,6 +157,7 @@ def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:
         max_paths=s["max_paths"],
         motion_weight=s["motion_weight"],
         grid_size=s["grid_size"],
+        forecast=int(s.get("forecast", 1)),  # sessions stored before it existed: 1
     )
 
 
@@ -246,6 +247,7 @@ def session_json(
             "max_paths": int(st["max_paths"]),
             "motion_weight": float(st["motion_weight"]),
             "grid_size": int(st["grid_size"]),
+            "forecast": int(st.get("forecast", 1)),
             "seed": None if st.get("seed") is None else int(st["seed"]),
         },
         "max_outliers": int(cfg["max_outliers"]),

@@ -128,6 +128,7 @@ class StrategyOut(BaseModel):
     max_paths: int
     motion_weight: float
     grid_size: int
+    forecast: int = 1
     seed: int | None = None
 
 
@@ -315,6 +316,11 @@ def input_models(settings: Settings) -> InputModels:
         )
         motion_weight: Annotated[float, Field(ge=0, le=1e6)] = 0.0
         grid_size: Annotated[int, Field(ge=10, le=200)] = 70
+        forecast: Annotated[int, Field(ge=0, le=settings.max_plan_paths)] = Field(
+            1,
+            description="how many of the ranked paths get p_forecast (the recognition's "
+            "own forecast, one observation update per class each); 0: none, faster plans",
+        )
         seed: Annotated[int, Field(ge=0, le=2**63 - 1)] | None = Field(
             None,
             description=(

@@ -343,6 +343,21 @@ def test_plan_ranks_paths_with_every_field(client):
     assert len(client.get(f"/v1/sessions/{s['id']}/plan?limit=1").json()["paths"]) == 1
 
 
+def test_plan_forecasts_the_best_path_unless_told_not_to(client):
+    for forecast, expect in ((None, 1), (0, 0), (2, 2)):
+        body = {} if forecast is None else {"strategy": {"forecast": forecast, "budget_ms": 2000}}
+        s = create_session(client, **body)
+        assert s["strategy"]["forecast"] == (1 if forecast is None else forecast)
+        client.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM)
+        paths = client.get(f"/v1/sessions/{s['id']}/plan?limit=3").json()["paths"]
+        made = [p["p_forecast"] for p in paths]
+        if forecast is not None:  # with the default budget the forecast may run out
+            assert all(m is not None and 0 <= m <= 1 for m in made[:expect])
+        assert all(m is None for m in made[expect:])
+    bad = client.post("/v1/sessions", json={"objects": ["plate"], "strategy": {"forecast": -1}})
+    assert bad.status_code == 422 and "forecast" in bad.text
+
+
 def test_plan_from_the_sensor_position_given(client):
     s = create_session(client, sensor_position=[10, 0])
     url = f"/v1/sessions/{s['id']}/plan"

@@ -27,6 +27,8 @@ class StrategyIn:
         Attributes:
             budget_ms (float | Unset):  Default: 500.0.
             depth (int | Unset):  Default: 2.
+            forecast (int | Unset): how many of the ranked paths get p_forecast (the recognition's own forecast, one
+                observation update per class each); 0: none, faster plans Default: 1.
             grid_size (int | Unset):  Default: 70.
             max_paths (int | Unset):  Default: 5.
             motion_weight (float | Unset):  Default: 0.0.
@@ -37,6 +39,7 @@ class StrategyIn:
 
     budget_ms: float | Unset = 500.0
     depth: int | Unset = 2
+    forecast: int | Unset = 1
     grid_size: int | Unset = 70
     max_paths: int | Unset = 5
     motion_weight: float | Unset = 0.0
@@ -51,6 +54,8 @@ class StrategyIn:
         budget_ms = self.budget_ms
 
         depth = self.depth
+
+        forecast = self.forecast
 
         grid_size = self.grid_size
 
@@ -78,6 +83,8 @@ class StrategyIn:
             field_dict["budget_ms"] = budget_ms
         if depth is not UNSET:
             field_dict["depth"] = depth
+        if forecast is not UNSET:
+            field_dict["forecast"] = forecast
         if grid_size is not UNSET:
             field_dict["grid_size"] = grid_size
         if max_paths is not UNSET:
@@ -99,6 +106,8 @@ class StrategyIn:
         budget_ms = d.pop("budget_ms", UNSET)
 
         depth = d.pop("depth", UNSET)
+
+        forecast = d.pop("forecast", UNSET)
 
         grid_size = d.pop("grid_size", UNSET)
 
@@ -129,6 +138,7 @@ class StrategyIn:
         strategy_in = cls(
             budget_ms=budget_ms,
             depth=depth,
+            forecast=forecast,
             grid_size=grid_size,
             max_paths=max_paths,
             motion_weight=motion_weight,

@@ -30,6 +30,7 @@ class StrategyOut:
             max_paths (int):
             motion_weight (float):
             name (str):
+            forecast (int | Unset):  Default: 1.
             seed (int | None | Unset):
      """
 
@@ -39,6 +40,7 @@ class StrategyOut:
     max_paths: int
     motion_weight: float
     name: str
+    forecast: int | Unset = 1
     seed: int | None | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
@@ -59,6 +61,8 @@ class StrategyOut:
 
         name = self.name
 
+        forecast = self.forecast
+
         seed: int | None | Unset
         if isinstance(self.seed, Unset):
             seed = UNSET
@@ -76,6 +80,8 @@ class StrategyOut:
             "motion_weight": motion_weight,
             "name": name,
         })
+        if forecast is not UNSET:
+            field_dict["forecast"] = forecast
         if seed is not UNSET:
             field_dict["seed"] = seed
 
@@ -98,6 +104,8 @@ class StrategyOut:
 
         name = d.pop("name")
 
+        forecast = d.pop("forecast", UNSET)
+
         def _parse_seed(data: object) -> int | None | Unset:
             if data is None:
                 return data
@@ -115,6 +123,7 @@ class StrategyOut:
             max_paths=max_paths,
             motion_weight=motion_weight,
             name=name,
+            forecast=forecast,
             seed=seed,
         )
 
