@@ -24,6 +24,7 @@ from typing import Literal
 import numpy as np
 import shapely
 
+from planner.consistent import consistent_poses, consistent_set_bounds, consistent_volume
 from planner.constraints import (
     ANGLE_SLACK,
     LENGTH_SLACK,
@@ -35,9 +36,6 @@ from planner.constraints import (
 from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
 from planner.memo import cached_property
 from planner.pose import (
-    consistent_poses,
-    consistent_set_bounds,
-    consistent_volume,
     fit_batch,
     noise_scales,
     point_bounds,

@@ -10,7 +10,7 @@ fixes the slide of a family, and a contact far along a face already touched
 pins the rotation. Every hypothesis predicts where a path meets it (the
 outcome model, :mod:`planner.outcomes`); adding that contact to the
 hypothesis' own and bounding the pose again, with the recognition's bounds
-(:mod:`planner.pose`), gives the disk it would have after the touch.
+(:mod:`planner.pose`, :mod:`planner.consistent`), gives the disk it would have after the touch.
 
 World frame, lengths in the object files' unit, angles in radians.
 """
@@ -24,6 +24,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.candidates import Candidates
+from planner.consistent import consistent_set_bounds
 from planner.outcomes import (
     OutcomeConfig,
     Outcomes,
@@ -33,7 +34,6 @@ from planner.outcomes import (
     predict_outcomes,
 )
 from planner.pose import (
-    consistent_set_bounds,
     fit_batch,
     noise_scales,
     point_bounds,

@@ -10,15 +10,9 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
+from planner.consistent import consistent_poses, consistent_set_bounds, consistent_volume
 from planner.geometry import rotation_matrices
-from planner.pose import (
-    PoseFilter,
-    consistent_poses,
-    consistent_set_bounds,
-    consistent_volume,
-    fit_batch,
-    noise_scales,
-)
+from planner.pose import PoseFilter, fit_batch, noise_scales
 from planner.types import Pose, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
 
