@@ -87,17 +87,10 @@ def consistent_set_bounds(
         return ConsistentSet(moved, dth, feasible)
     from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
     use = assigned & (from_end <= max_contacts)
-    # theta' interval from the normals
-    psi = np.arctan2(normals[..., 1], normals[..., 0])
-    face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
-    r_ang = wrap_angle(psi - face_angle - theta[:, None])
     slack = 1e-9  # rounding of the measured angles
-    lo = np.where(use, r_ang - phi - slack, -np.inf).max(axis=1)
-    hi = np.where(use, r_ang + phi + slack, np.inf).min(axis=1)
+    lo, hi = _theta_interval(normals, face_normals, use, theta, phi + slack)
     lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
-    pairs = np.array(np.triu_indices(s, 1)).T  # (Q, 2)
-    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
-    per_row = samples * len(pairs) * 4 * max(P, s)
+    per_row = samples * s * (s - 1) * 2 * max(P, s)
     chunk = max(1, 2_000_000 // per_row)
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))
@@ -114,8 +107,6 @@ def consistent_set_bounds(
             eps_d,
             lever,
             samples,
-            pairs,
-            sides,
         )
     return ConsistentSet(moved, dth, feasible)
 
@@ -133,45 +124,26 @@ def _sweep(
     eps_d: float,
     lever: float,
     samples: int,
-    pairs: np.ndarray,
-    sides: np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """:func:`consistent_set_bounds` on one chunk of rows."""
     empty_range = hi < lo
     span = np.where(empty_range, 0.0, hi - lo)
     delta = span / (samples - 1)  # (K,) step between samples
     d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)  # offsets from the fit
-    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
-    n = np.einsum("knij,ksj->knsi", R, face_normals)  # posed normals (K, N, s, 2)
-    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]  # n'·t' = centre ± w
     width = eps_d + lever * delta / 2  # (K,) slab half-width, widened for the step
-    i, j = pairs[:, 0], pairs[:, 1]
-    a, b = n[:, :, i], n[:, :, j]  # (K, N, Q, 2)
-    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
-    bounded = good.any(axis=(1, 2)) & ~empty_range
-    det = np.where(good, det, 1.0)
-    w = width[:, None, None, None]
-    ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + w * sides[:, 1]
-    vx = (ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]
-    vy = (a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]
-    vert = np.stack([vx, vy], axis=-1)  # (K, N, Q, 4, 2) candidate translations t'
-    proj = np.einsum("knsi,knqvi->knqvs", n, vert)
-    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
-    inside = np.abs(proj - centre[:, :, None, None, :]) <= (
-        width[:, None, None, None, None] + tol[:, :, None, None, :]
-    )
-    ok = good[..., None] & np.all(inside | ~use[:, None, None, None, :], axis=-1)
-    ok &= ~empty_range[:, None, None, None]
+    vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, width)
+    bounded &= ~empty_range
+    ok &= ~empty_range[:, None, None]
     # displacement of each model point: R' v + t' - (R v + t)
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
     fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
     posed = np.einsum("knij,pj->knpi", R, model_points)  # (K, N, P, 2)
-    disp = vert[:, :, :, :, None, :] + posed[:, :, None, None] - fit_pts[:, None, None, None]
+    vert = np.stack([vx, vy], axis=-1)  # (K, N, V, 2) candidate translations t'
+    disp = vert[:, :, :, None, :] + posed[:, :, None] - fit_pts[:, None, None]
     norm = np.where(ok[..., None], np.linalg.norm(disp, axis=-1), -np.inf)
     radius = np.hypot(*np.asarray(model_points, dtype=float).T)  # (P,) |v|
-    moved = norm.max(axis=(1, 2, 3)) + radius[None] * delta[:, None] / 2  # (K, P)
-    feasible = ok.any(axis=(2, 3))  # (K, N)
+    moved = norm.max(axis=(1, 2)) + radius[None] * delta[:, None] / 2  # (K, P)
+    feasible = ok.any(axis=2)  # (K, N)
     ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
     dth = ang + delta / 2
     some = feasible.any(axis=1)
@@ -244,12 +216,13 @@ def _polygons(
     use: np.ndarray,
     theta: np.ndarray,
     d_theta: np.ndarray,
-    eps_d: float,
+    width: float | np.ndarray,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
     """The consistent translations at rotations ``theta + d_theta`` (K, N): the
-    convex polygon where every used contact lies within eps_d of its face's posed
-    line, as its candidate vertices (slab-edge crossings) `vx`, `vy` (K, N, V),
-    `ok` (K, N, V) for those inside every slab, and `bounded` (K,)."""
+    convex polygon where every used contact lies within `width` (scalar or (K,))
+    of its face's posed line, as its candidate vertices (slab-edge crossings)
+    `vx`, `vy` (K, N, V), `ok` (K, N, V) for those inside every slab, and
+    `bounded` (K,): two non-parallel faces are used."""
     s = use.shape[1]
     pairs = np.array(np.triu_indices(s, 1)).T
     sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
@@ -261,14 +234,15 @@ def _polygons(
     det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
     good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
     det = np.where(good, det, 1.0)
-    ci = centre[:, :, i, None] + eps_d * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + eps_d * sides[:, 1]
+    w = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None, None]
+    ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + w * sides[:, 1]
     shape = (*det.shape[:2], -1)
     vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
     vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
     proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
     tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
-    inside = np.abs(proj - centre[:, :, None, :]) <= eps_d + tol[:, :, None, :]
+    inside = np.abs(proj - centre[:, :, None, :]) <= w + tol[:, :, None, :]
     ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
     return vx, vy, ok, good.any(axis=(1, 2))
 

@@ -116,7 +116,7 @@ def with_forecast(
     start = time.perf_counter()
     left = None if budget_ms is None else max(budget_ms - plan.elapsed_ms, 0.0)
     deadline = Deadline.after_ms(left)
-    paths: Sequence = list(plan.paths)
+    paths = list(plan.paths)
     for i, p in enumerate(paths[:count]):
         value = forecast_distinguishing(session, p.path, deadline, config)
         if value is None:

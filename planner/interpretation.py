@@ -241,29 +241,54 @@ def _admitted_share(
     end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None, :]
     dist = point_segment_distance(P[None, None], start, end)  # (K, M, s)
     good = valid & np.all(~assigned[:, None, :] | (dist <= eps_d + floor), axis=-1)
-    flat_theta, flat_t = theta.reshape(-1), t.reshape(-1, 2)
-    shrink = np.full(K * M, floor)
+    clear = _clear_paths(
+        group,
+        observations,
+        np.repeat(assigned, M, axis=0),
+        theta.reshape(-1),
+        t.reshape(-1, 2),
+        np.full(K * M, floor),
+        good.reshape(-1),
+        eps_d,
+        floor,
+    )
+    good = clear.reshape(K, M)
+    count = valid.sum(axis=1)
+    share = good.sum(axis=1) / np.maximum(count, 1)
+    return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
+
+
+def _clear_paths(
+    group: Group,
+    observations: list[Observation],
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    shrink: np.ndarray,
+    keep: np.ndarray,
+    back: float,
+    floor: float,
+) -> np.ndarray:
+    """`keep` (N,) and, for each pose (`theta`, `t`, N rows), every path clear of
+    the posed outline shrunk by `shrink`: up to each contact the row assigns
+    (`assigned` (N, s)), less `back`, and each missed path whole."""
+    keep = keep.copy()
     contact_col = 0
     for obs in observations:
         o, d = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
         if obs.contact is None:
             reach_len = obs.path.length
-            mine = np.ones(K, dtype=bool)
+            check = keep.copy()
         else:
-            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - eps_d
-            mine = assigned[:, contact_col]
+            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - back
+            check = keep & assigned[:, contact_col]
             contact_col += 1
-        idx = np.flatnonzero((good & mine[:, None]).reshape(-1))
+        idx = np.flatnonzero(check)
         if idx.size:
-            clear = _free_space_ok(
-                group, flat_theta[idx], flat_t[idx], shrink[idx], o, d, reach_len, floor
+            keep[idx] &= _free_space_ok(
+                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor
             )
-            g = good.reshape(-1)
-            g[idx] &= clear
-            good = g.reshape(K, M)
-    count = valid.sum(axis=1)
-    share = good.sum(axis=1) / np.maximum(count, 1)
-    return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
+    return keep
 
 
 def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
@@ -468,21 +493,7 @@ def evaluate(
     # free space: path up to each contact (less eps_d), and each missed path whole
     floor = max(slack, 1e-9)
     shrink = eps_t / 2 + slack
-    contact_col = 0
-    for obs in observations:
-        o, d = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
-        if obs.contact is None:
-            reach_len = obs.path.length
-            check = ok.copy()
-        else:
-            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - eps_d - slack
-            check = ok & a_src[:, contact_col]
-            contact_col += 1
-        idx = np.flatnonzero(check)
-        if idx.size:
-            ok[idx] &= _free_space_ok(
-                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor
-            )
+    ok = _clear_paths(group, observations, a_src, theta, t, shrink, ok, eps_d + slack, floor)
 
     # determined poses: the share of their consistent set that also keeps every
     # contact on its finite face and every path clear of the outline, exactly

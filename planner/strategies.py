@@ -396,14 +396,8 @@ def plan(
         paths, note = _refining(
             found, hypotheses, _models(models), contacts, sensor, ranking, config
         )
-    windows = np.flatnonzero(found.candidates.source == "window")
-    if not paths and config.name == "thesis" and len(windows):
-        # the thesis takes its best window whatever a finer model predicts of it
-        if config.thesis_choice == "random":
-            tier = found.candidates.tier[windows]
-            windows = gen.permutation(windows[tier == tier.min()])
-        paths = [_planned(found, int(windows[0]), ranking)]
-        note = "; ".join(filter(None, [note, "the thesis' best window, though not informative"]))
+    if not paths and config.name == "thesis":
+        paths, note = _thesis_window(found, ranking, config, gen, note)
     if found.truncated:
         note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
     return finish(
@@ -414,6 +408,26 @@ def plan(
         candidates=len(found.candidates),
         classes=found.table.n_classes,
     )
+
+
+def _thesis_window(
+    found: Analysis,
+    ranking: Ranking,
+    config: StrategyConfig,
+    rng: np.random.Generator,
+    note: str | None,
+) -> tuple[list[PlannedPath], str | None]:
+    """The thesis takes its best window whatever a finer model predicts of it (it
+    raised the admitted strength until one opened): the first in CHOOSE order, or
+    a random one of the lowest level; none when the grid found no window."""
+    windows = np.flatnonzero(found.candidates.source == "window")
+    if not len(windows):
+        return [], note
+    if config.thesis_choice == "random":
+        tier = found.candidates.tier[windows]
+        windows = rng.permutation(windows[tier == tier.min()])
+    said = "the thesis' best window, though not informative"
+    return [_planned(found, int(windows[0]), ranking)], "; ".join(filter(None, [note, said]))
 
 
 def _refining(
