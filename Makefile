@@ -34,11 +34,11 @@ test: lint
 
 # Regenerate the committed HTTP client from the service's OpenAPI schema.
 client: $(VENV)/.installed-dev
-	$(BIN)/python -m app.schema
+	$(BIN)/python -m tactile.client_gen
 
 # A real `tactile serve` at 1 and 2 workers under a bounded locust fleet of robots.
 loadtest: $(VENV)/.installed-dev
-	$(BIN)/python -m hardware_sim.loadtest --workers 1 2 --users 8 --seconds 30
+	$(BIN)/python -m tactile.loadtest --workers 1 2 --users 8 --seconds 30
 
 clean:
 	rm -rf $(VENV) .pytest_cache .ruff_cache .mypy_cache .hypothesis

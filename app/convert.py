@@ -31,10 +31,11 @@ from app.schemas import (
     WorkspaceOut,
 )
 from app.store import SessionRecord
-from planner.interpretation import RecognitionConfig
-from planner.library import object_from_dict
-from planner.session import Session
-from planner.strategies import Plan, StrategyConfig
+from planner.models.library import object_from_dict
+from planner.planning.config import StrategyConfig
+from planner.planning.result import Plan
+from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
 
 __all__ = [

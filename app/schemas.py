@@ -29,7 +29,7 @@ from pydantic import (
 )
 
 from app.settings import Settings
-from planner.strategies import STRATEGIES
+from planner.planning.config import STRATEGIES
 
 __all__ = [
     "ContactOut",

@@ -1,7 +1,7 @@
 """What the routes call: stored sessions -> planner sessions -> answers.
 
-The planner does the work (:class:`planner.session.Session` derives the
-hypotheses, :func:`planner.strategies.plan` ranks paths, :mod:`planner.render`
+The planner does the work (:class:`planner.recognition.session.Session` derives the
+hypotheses, :func:`planner.planning.strategies.plan` ranks paths, :mod:`planner.render`
 draws); this module only moves data between the store, the planner and JSON,
 and decides where work runs:
 
@@ -65,10 +65,10 @@ from app.store import (
     VersionConflictError,
 )
 from planner.errors import PlannerError
-from planner.forecast import plan_session
-from planner.library import object_from_dict, object_to_dict
-from planner.session import Session
-from planner.strategies import Plan
+from planner.models.library import object_from_dict, object_to_dict
+from planner.planning.plan import plan_session
+from planner.planning.result import Plan
+from planner.recognition.session import Session
 from planner.types import ObjectModel, SensorBounds, Workspace
 
 __all__ = ["Answer", "SessionService"]
@@ -202,7 +202,7 @@ class SessionService:
         self, data: bytes, file_type: str, height: float, name: str, max_poses: int | None
     ) -> tuple[bool, str]:
         """Register the object model of an uploaded triangle mesh."""
-        from planner.mesh import import_mesh_bytes
+        from planner.models.mesh import import_mesh_bytes
 
         model = await self.run_cpu(import_mesh_bytes, data, file_type, height, name, max_poses)
         created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
@@ -483,8 +483,8 @@ class SessionService:
     def _draw(
         self, session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
     ) -> bytes:
-        from planner.grid import build_grid
-        from planner.mii import build_mii
+        from planner.image.grid import build_grid
+        from planner.image.vector import build_mii
         from planner.render import render_png, render_svg
 
         hyps = session.hypotheses

@@ -69,7 +69,7 @@ class Settings(BaseSettings):
 
     @model_validator(mode="after")
     def _defaults_within_limits(self) -> Settings:
-        from planner.strategies import STRATEGIES
+        from planner.planning.config import STRATEGIES
 
         if self.default_strategy not in STRATEGIES:
             raise ValueError(f"default_strategy must be one of {list(STRATEGIES)}")

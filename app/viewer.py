@@ -7,7 +7,7 @@ from typing import Any
 
 import shapely
 
-from planner.session import Session
+from planner.recognition.session import Session
 
 __all__ = ["VIEW_HTML", "mii_json"]
 
@@ -30,7 +30,7 @@ def _lines(geom: shapely.Geometry) -> list[list[list[float]]]:
 
 def mii_json(session: Session, sensor_position: list[float]) -> dict[str, Any]:
     """World-frame geometry of the session's MII for drawing (lengths in model units)."""
-    from planner.mii import build_mii
+    from planner.image.vector import build_mii
 
     hyps = session.hypotheses
     out: dict[str, Any] = {

@@ -19,6 +19,7 @@ import numpy as np
 
 from hardware_sim.presets import PRESETS, Preset, build_arm, resolve_preset
 from hardware_sim.world import random_world
+from planner.models.library import load_objects
 from planner.types import ObjectModel, Workspace
 
 __all__ = ["TouchErrors", "main", "touch_errors"]
@@ -88,15 +89,13 @@ def touch_errors(
 
 def main(argv: Sequence[str] | None = None) -> int:
     """Print the error distribution of every preset (or the chosen ones)."""
-    from hardware_sim.experiments import _load
-
     parser = argparse.ArgumentParser(prog="python -m hardware_sim.accuracy", description=__doc__)
     parser.add_argument("--objects", default="thesis_like")
     parser.add_argument("--sensor", action="append", choices=sorted(PRESETS))
     parser.add_argument("--touches", type=int, default=2000)
     parser.add_argument("--seed", type=int, default=0)
     args = parser.parse_args(argv)
-    models = _load(args.objects)
+    models = load_objects(args.objects)
     print(
         "preset         touches  normal error deg p50/p95/p99/max (bound)  inside  "
         "position p50/p95/p99/max (bound)  inside"

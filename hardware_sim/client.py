@@ -4,7 +4,7 @@ The loop (:func:`run_recognition`) talks to two boundaries only:
 
 - a :class:`RecognitionService`, the planner side: "what next?" and "here is
   what the probe found". :class:`InProcessService` calls the planner library
-  directly (``planner.session.Session`` + ``planner.forecast.plan_session``);
+  directly (``planner.recognition.session.Session`` + ``planner.planning.forecast.plan_session``);
   :class:`hardware_sim.http_service.HttpService` asks a running service through
   the generated client (``hardware_sim.api_client``);
 - a :class:`hardware_sim.protocol.Probe`, the hardware side.
@@ -13,7 +13,7 @@ World frame, lengths in the object files' unit, angles in radians.
 
 >>> from hardware_sim.presets import build_arm
 >>> from hardware_sim.world import World
->>> from planner.library import object_from_dict
+>>> from planner.models.library import object_from_dict
 >>> sq = object_from_dict({"name": "sq", "outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]})
 >>> ws = Workspace((0, 0), 100)
 >>> world = World(sq, 0, Pose(5.0, -3.0, 0.3), ws)
@@ -33,10 +33,10 @@ from typing import Protocol
 import numpy as np
 
 from hardware_sim.protocol import Probe
-from planner.forecast import plan_session
-from planner.interpretation import RecognitionConfig
-from planner.session import Session
-from planner.strategies import StrategyConfig
+from planner.planning.config import StrategyConfig
+from planner.planning.plan import plan_session
+from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.session import Session
 from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
 
 __all__ = [

@@ -9,10 +9,9 @@ compared on identical cases, and results do not depend on how trials are batched
 or on the number of workers (as long as the planner's time budget does not bind:
 strategies whose search stops at `budget_ms` depend on the machine's speed).
 
-Per strategy: the share of trials needing 1, 2, ..., 10 and more than 10 touches
-(unlocalized trials count as "> 10"), mean and max touches (an unlocalized trial
-is charged `max_touches`), success rate (localized, right object and pose within
-the hypothesis' own error bound), and planning time per step.
+Each trial's result (:class:`TrialResult`) says how many touches it took, whether
+it ended localized on the right object and pose, and the planning time per step;
+:mod:`hardware_sim.summary` turns them into the Table 4.1 rows.
 
 Parallel: joblib (loky processes) by default, trials batched per task; a Dask
 cluster with ``dask=ADDRESS`` (``dask.distributed`` imported only then).
@@ -38,24 +37,12 @@ from hardware_sim.client import InProcessService, outline_distance, run_recognit
 from hardware_sim.presets import PRESETS, Preset, build_arm, explicit_preset, resolve_preset
 from hardware_sim.world import PLACEMENTS, random_world
 from planner.errors import PlannerError
-from planner.interpretation import RecognitionConfig
-from planner.strategies import STRATEGIES, THESIS_CHOICES, StrategyConfig
+from planner.planning.config import STRATEGIES, THESIS_CHOICES, StrategyConfig
+from planner.recognition.interpretation import RecognitionConfig
 from planner.types import ObjectModel, Workspace
 
-__all__ = [
-    "BINS",
-    "ExperimentSpec",
-    "StrategySummary",
-    "TrialResult",
-    "add_simulate_command",
-    "histogram",
-    "run_experiment",
-    "run_trial",
-    "summarize",
-]
+__all__ = ["ExperimentSpec", "TrialResult", "run_experiment", "run_trial"]
 
-#: Table 4.1 columns: 1, 2, ..., 10 touches, then more than 10.
-BINS = (*(str(k) for k in range(1, 11)), ">10")
 
 Progress = Callable[[int, int], None]
 
@@ -124,33 +111,6 @@ class TrialResult:
     @property
     def localized(self) -> bool:
         return self.status == "localized"
-
-
-@dataclass(frozen=True)
-class StrategySummary:
-    """One row of the Table 4.1 analog (shares in [0, 1], times in ms)."""
-
-    strategy: str
-    trials: int
-    histogram: dict[str, float]
-    mean_touches: float
-    max_touches: int
-    success_rate: float
-    mean_plan_ms: float
-    p95_plan_ms: float
-
-    def as_dict(self) -> dict[str, Any]:
-        """The ``tactile simulate --json`` form of one strategy (DESIGN §7)."""
-        return {
-            "strategy": self.strategy,
-            "trials": self.trials,
-            "histogram": dict(self.histogram),
-            "mean_touches": self.mean_touches,
-            "max_touches": self.max_touches,
-            "success_rate": self.success_rate,
-            "mean_plan_ms": self.mean_plan_ms,
-            "p95_plan_ms": self.p95_plan_ms,
-        }
 
 
 def _seed(spec: ExperimentSpec, trial: int, stream: int) -> np.random.SeedSequence:
@@ -317,238 +277,3 @@ def _dask_map(
             yield future.result()
 
 
-def histogram(touches: Sequence[int], localized: Sequence[bool]) -> dict[str, float]:
-    """Share of trials per Table 4.1 column: "1" ... "10", ">10" (unlocalized
-    trials count as ">10"); the shares sum to 1."""
-    counts = dict.fromkeys(BINS, 0)
-    for t, ok in zip(touches, localized, strict=True):
-        counts[str(t) if ok and 1 <= t <= 10 else ">10"] += 1
-    n = max(len(touches), 1)
-    return {k: v / n for k, v in counts.items()}
-
-
-def summarize(
-    results: Sequence[TrialResult], strategies: Sequence[str], max_touches: int
-) -> list[StrategySummary]:
-    """One Table 4.1 row per strategy, in the given order."""
-    rows = []
-    for name in strategies:
-        rs = [r for r in results if r.strategy == name]
-        if not rs:
-            continue
-        # an unlocalized trial is charged the whole touch budget
-        charged = np.array([r.touches if r.localized else max_touches for r in rs])
-        times = np.concatenate([np.asarray(r.plan_ms, dtype=float) for r in rs] + [np.zeros(0)])
-        rows.append(
-            StrategySummary(
-                strategy=name,
-                trials=len(rs),
-                histogram=histogram([r.touches for r in rs], [r.localized for r in rs]),
-                mean_touches=float(charged.mean()),
-                max_touches=int(charged.max()),
-                success_rate=float(np.mean([r.success for r in rs])),
-                mean_plan_ms=float(times.mean()) if len(times) else 0.0,
-                p95_plan_ms=float(np.percentile(times, 95)) if len(times) else 0.0,
-            )
-        )
-    return rows
-
-
-# -- command line -----------------------------------------------------------------------
-
-
-def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.ArgumentParser:
-    """Add ``tactile simulate`` (DESIGN §7) to an argparse subparsers object.
-
-    `extended` adds options beyond the DESIGN's contract (``--trial-timeout``),
-    used by ``python -m hardware_sim.experiments simulate``."""
-    p = subparsers.add_parser(
-        "simulate",
-        help="many simulated recognitions per strategy: the thesis' Table 4.1 layout",
-        description=__doc__.split("\n\n")[0],
-    )
-    p.add_argument("--objects", required=True, help="object file (or embedded set name)")
-    p.add_argument("--truth", default=None, help="name of the true object (default: random)")
-    p.add_argument(
-        "--strategy",
-        action="append",
-        required=True,
-        choices=STRATEGIES,
-        help="planning strategy (repeatable)",
-    )
-    p.add_argument("--trials", type=int, default=100)
-    p.add_argument("--seed", type=int, default=0)
-    p.add_argument(
-        "--sensor",
-        default=None,
-        choices=sorted(PRESETS),
-        help="hardware preset (default ideal); or give --position-error and --normal-error",
-    )
-    p.add_argument("--position-error", type=float, default=None, help="bounded noise (length)")
-    p.add_argument("--normal-error", type=float, default=None, help="bounded noise (radians)")
-    p.add_argument("--max-touches", type=int, default=20)
-    p.add_argument(
-        "--placement",
-        default="anywhere",
-        choices=PLACEMENTS,
-        help="where the true object lies: anywhere inside the safe circle (default), or "
-        "centred on it as in the thesis' simulations",
-    )
-    p.add_argument(
-        "--error-disk",
-        type=float,
-        default=None,
-        metavar="FRACTION",
-        help="recognize with the thesis' fixed error disk, this fraction of the object's "
-        "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
-    )
-    p.add_argument(
-        "--thesis-choice",
-        default="choose",
-        choices=THESIS_CHOICES,
-        help="how `thesis` picks among its best windows: the nearest origin (the thesis' "
-        "hardware, default) or at random (the thesis' simulations)",
-    )
-    where = p.add_mutually_exclusive_group()
-    where.add_argument("--workers", type=int, default=None, help="joblib processes (all cores)")
-    where.add_argument("--dask", default=None, metavar="ADDRESS", help="Dask scheduler address")
-    p.add_argument("--plot", default=None, metavar="FILE", help="write the histograms as PNG")
-    p.add_argument("--json", action="store_true", help="print one JSON object")
-    if extended:
-        p.add_argument(
-            "--trial-timeout",
-            type=float,
-            default=None,
-            metavar="SECONDS",
-            help="end a trial after this wall time (status timeout, counted unlocalized)",
-        )
-    p.set_defaults(func=cmd_simulate)
-    return p
-
-
-def _preset_from_args(args: argparse.Namespace) -> Preset:
-    explicit = args.position_error is not None or args.normal_error is not None
-    if explicit and args.sensor is not None:
-        raise ValueError("give either --sensor or --position-error/--normal-error")
-    if explicit:
-        return explicit_preset(args.position_error or 0.0, args.normal_error or 0.0)
-    return resolve_preset(args.sensor or "ideal")
-
-
-def _load(value: str) -> list[ObjectModel]:
-    from pathlib import Path
-
-    from planner.library import load_objects
-
-    path = Path(value)
-    if not path.exists() and not value.endswith(".json"):
-        from importlib import resources
-
-        path = Path(str(resources.files("planner") / "data" / f"{value}.json"))
-    return load_objects(path)
-
-
-def _progress_bar(total: int) -> tuple[Progress, Callable[[], None]]:
-    """A progress bar on stderr (tqdm when installed, else a plain counter)."""
-    try:
-        from tqdm import tqdm
-    except ImportError:
-
-        def plain(done: int, _total: int) -> None:
-            print(f"\rtrials {done}/{_total}", end="", file=sys.stderr, flush=True)
-
-        return plain, lambda: print(file=sys.stderr)
-    bar = tqdm(total=total, unit="trial", file=sys.stderr, leave=False)
-
-    def update(done: int, _total: int) -> None:
-        bar.update(done - bar.n)
-
-    return update, bar.close
-
-
-def format_table(rows: Sequence[StrategySummary]) -> str:
-    """The Table 4.1 layout: percent of trials per number of touches, then stats."""
-    head = f"{'strategy':10s} " + " ".join(f"{b:>4s}" for b in BINS)
-    head += "   mean  max  success  plan ms mean/p95"
-    lines = [head]
-    for r in rows:
-        cells = " ".join(f"{100 * r.histogram[b]:4.0f}" for b in BINS)
-        lines.append(
-            f"{r.strategy:10s} {cells}  {r.mean_touches:5.2f} {r.max_touches:4d}  "
-            f"{100 * r.success_rate:6.1f}%  {r.mean_plan_ms:7.1f} / {r.p95_plan_ms:.1f}"
-        )
-    return "\n".join(lines)
-
-
-def cmd_simulate(args: argparse.Namespace) -> int:
-    """Run ``tactile simulate``; prints the table (or JSON) on stdout."""
-    try:
-        preset = _preset_from_args(args)
-        spec = ExperimentSpec(
-            models=tuple(_load(args.objects)),
-            strategies=tuple(dict.fromkeys(args.strategy)),
-            trials=args.trials,
-            seed=args.seed,
-            preset=preset,
-            max_touches=args.max_touches,
-            truth=args.truth,
-            trial_timeout=getattr(args, "trial_timeout", None),
-            placement=args.placement,
-            strategy=(
-                {} if args.thesis_choice == "choose" else {"thesis_choice": args.thesis_choice}
-            ),
-            recognition=(
-                {}
-                if args.error_disk is None
-                else {"bound_mode": "thesis", "thesis_fraction": args.error_disk}
-            ),
-        )
-    except (ValueError, PlannerError) as exc:
-        print(f"tactile simulate: error: {exc}", file=sys.stderr)
-        return 2
-    update, close = _progress_bar(spec.trials * len(spec.strategies))
-    try:
-        results = run_experiment(spec, args.workers, args.dask, update)
-    except RuntimeError as exc:
-        close()
-        print(f"tactile simulate: error: {exc}", file=sys.stderr)
-        return 2
-    close()
-    rows = summarize(results, spec.strategies, spec.max_touches)
-    if args.plot:
-        from hardware_sim.plots import plot_histograms
-
-        plot_histograms(rows, args.plot, title=f"{args.objects}, {preset.name}")
-    if args.json:
-        print(json.dumps({"strategies": [r.as_dict() for r in rows]}))
-        return 0
-    b = preset.bounds
-    print(
-        f"{args.objects}: {len(spec.models)} objects, truth {args.truth or 'random'}, "
-        f"sensor {preset.name} (bounds {b.position_error:g}, "
-        f"{math.degrees(b.normal_error):g} deg), {spec.trials} trials, seed {spec.seed}, "
-        f"max {spec.max_touches} touches, object placed {spec.placement}"
-        + (f", error disk {args.error_disk:g} of the diameter" if args.error_disk else "")
-        + (f", thesis picks {args.thesis_choice}" if "thesis" in spec.strategies else "")
-    )
-    print("percent of trials needing N touches (unlocalized: >10)")
-    print(format_table(rows))
-    timeouts = sum(r.status == "timeout" for r in results)
-    if timeouts:
-        print(f"{timeouts} trials stopped at the trial timeout (counted unlocalized)")
-    if args.plot:
-        print(f"wrote {args.plot}")
-    return 0
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """``python -m hardware_sim.experiments simulate ...``: the same command as
-    ``tactile simulate`` plus the extended options."""
-    parser = argparse.ArgumentParser(prog="python -m hardware_sim.experiments")
-    add_simulate_command(parser.add_subparsers(dest="command", required=True), extended=True)
-    args = parser.parse_args(argv)
-    return int(args.func(args))
-
-
-if __name__ == "__main__":
-    sys.exit(main())

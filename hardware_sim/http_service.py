@@ -53,7 +53,7 @@ from hardware_sim.api_client.models import (
 )
 from hardware_sim.api_client.types import UNSET, Response, Unset
 from hardware_sim.client import Advice, Estimate, Update
-from planner.library import object_to_dict
+from planner.models.library import object_to_dict
 from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
 
 __all__ = [

@@ -4,11 +4,12 @@ from __future__ import annotations
 
 import math
 
-from planner.grid import build_grid
-from planner.mii import build_mii
+from planner.image.grid import build_grid
+from planner.image.vector import build_mii
+from planner.planning.config import StrategyConfig
+from planner.planning.plan import plan
+from planner.recognition.session import Session
 from planner.render import render_png, render_svg
-from planner.session import Session
-from planner.strategies import StrategyConfig, plan
 from planner.types import Contact, ObjectModel, Observation, SensingPath, SensorBounds, Workspace
 
 __all__ = ["bump_block_pair", "session_picture"]

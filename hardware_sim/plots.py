@@ -7,7 +7,7 @@ from collections.abc import Sequence
 from typing import TYPE_CHECKING
 
 if TYPE_CHECKING:
-    from hardware_sim.experiments import StrategySummary
+    from hardware_sim.summary import StrategySummary
 
 __all__ = ["plot_histograms"]
 
@@ -21,7 +21,7 @@ def plot_histograms(
     from matplotlib.backends.backend_agg import FigureCanvasAgg
     from matplotlib.figure import Figure
 
-    from hardware_sim.experiments import BINS
+    from hardware_sim.summary import BINS
 
     fig = Figure(figsize=(9, 4.5), dpi=100)
     FigureCanvasAgg(fig)

@@ -13,7 +13,7 @@ implement the same two members.
 
 >>> from hardware_sim.arm import SimulatedArm
 >>> from hardware_sim.world import World
->>> from planner.library import object_from_dict
+>>> from planner.models.library import object_from_dict
 >>> from planner.types import Pose, SensingPath, Workspace
 >>> outline = [[-10, -10], [10, -10], [10, 10], [-10, 10]]
 >>> square = object_from_dict({"name": "sq", "outline": outline})

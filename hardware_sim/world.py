@@ -14,7 +14,7 @@ import numpy as np
 import shapely
 
 from planner.geometry import cast_rays
-from planner.prior import draw_poses, draw_stable_poses
+from planner.models.prior import draw_poses, draw_stable_poses
 from planner.types import (
     Contact,
     ObjectModel,
@@ -123,7 +123,7 @@ def random_world(
     rng: np.random.Generator,
     placement: str = "anywhere",
 ) -> World:
-    """A true world drawn from the planner's prior (:mod:`planner.prior`): object by
+    """A true world drawn from the planner's prior (:mod:`planner.models.prior`): object by
     its prior, stable pose by its probability, orientation uniform. `placement`
     ``anywhere``: position uniform among those keeping the object inside the safe
     circle (the planner's assumption, so its probabilities can be checked against

@@ -21,8 +21,8 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import shapely
 
-from planner.grid import GridMII, ThesisPath
-from planner.mii import VectorMII
+from planner.image.grid import GridMII, ThesisPath
+from planner.image.vector import VectorMII
 from planner.types import Contact, Observation, SensingPath, Workspace
 
 if TYPE_CHECKING:
@@ -355,7 +355,7 @@ def render_svg(
     ids are stable, so the output is deterministic for a given input.
 
     >>> from planner.geometry import make_stable_pose
-    >>> from planner.mii import build_mii
+    >>> from planner.image.vector import build_mii
     >>> from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose
     >>> sq = ObjectModel("sq", (make_stable_pose([[0, 0], [2, 0], [2, 1], [0, 1]]),))
     >>> hs = [Hypothesis("sq", 0, (), Pose(x, 0, 0), ErrorBound(0, 0, 0), 0.5,

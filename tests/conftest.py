@@ -7,9 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from hardware_sim.experiments import ExperimentSpec, run_experiment
 from hardware_sim.world import random_world
-from planner.library import load_objects
-from planner.session import Session
+from planner.models.library import load_objects, object_from_dict
+from planner.recognition.session import Session
 from planner.types import ObjectModel, SensorBounds, Workspace
 
 DATA = Path(__file__).resolve().parents[1] / "planner" / "data"
@@ -41,7 +42,8 @@ def touched_session(name: str, bounds: SensorBounds, seed: int, touches: int):
 def analysed(session: Session):
     """The planner's analysis of a session's state (default strategy, no budget),
     planned from (R, 0) on the safe circle."""
-    from planner.strategies import StrategyConfig, analyse
+    from planner.planning.analysis import analyse
+    from planner.planning.config import StrategyConfig
 
     return analyse(
         session.hypotheses,
@@ -53,3 +55,32 @@ def analysed(session: Session):
         0,
         observations=session.observations,
     )
+
+
+# -- a small experiment: two shapes in a small safe circle, a few seeded trials --------
+ELL = object_from_dict(
+    {"name": "ell", "outline": [[0, 0], [40, 0], [40, 15], [15, 15], [15, 30], [0, 30]]}
+)
+WEDGE = object_from_dict({"name": "wedge", "outline": [[0, 0], [40, 0], [10, 25]]})
+SQUARE = object_from_dict({"name": "sq", "outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]})
+SMALL_WS = Workspace((0.0, 0.0), 80.0)
+
+
+def small_spec(**kw) -> ExperimentSpec:
+    base = {
+        "models": (ELL, WEDGE),
+        "strategies": ("pdm", "random"),
+        "trials": 3,
+        "seed": 3,
+        "workspace": SMALL_WS,
+        "max_touches": 6,
+        # no time budget: plans then do not depend on how loaded the machine is
+        "strategy": {"budget_ms": None},
+    }
+    return ExperimentSpec(**{**base, **kw})
+
+
+@pytest.fixture(scope="module")
+def sequential_results():
+    """The small experiment run in this process."""
+    return run_experiment(small_spec(), workers=1)

@@ -1,0 +1,129 @@
+"""Everything known about the candidate paths before a strategy chooses (DESIGN §4.10-4.12).
+
+:func:`analyse` builds the candidates (the strategy's own first, then the general
+set), casts them against every posed hypothesis, turns the outcomes into class
+survivor sets and scores them. World frame, lengths in the object files' unit.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.planning.bitsets import SurvivorTable
+from planner.planning.budget import Deadline
+from planner.planning.candidates import Candidates, generate_candidates
+from planner.planning.config import StrategyConfig
+from planner.planning.confusability import class_bits
+from planner.planning.outcomes import Outcomes, predict_outcomes
+from planner.planning.posed_set import PosedSet, pose_hypotheses
+from planner.planning.probes import strategy_paths
+from planner.planning.scoring import InformationScores, information_scores, motion_cost
+from planner.planning.survivors import pin_families, repeated_paths
+from planner.types import Hypothesis, ObjectModel, Observation, SensingPath, SensorBounds, Workspace
+
+__all__ = ["Analysis", "analyse", "as_generator", "models_by_name"]
+
+#: Fewest candidates per block when a time budget splits the outcome passes, and
+#: fewest candidates x hypotheses per block.
+_BLOCK = 16
+_BLOCK_ELEMENTS = 4096
+
+
+@dataclass(frozen=True, eq=False)
+class Analysis:
+    """Everything known about the candidates before a strategy chooses.
+
+    `posed` hypotheses, `candidates` (C paths), their `outcomes`, the class
+    survivor `table`, the information scores `info` and `motion` cost (C,);
+    `truncated` when the time budget left candidates out."""
+
+    posed: PosedSet
+    candidates: Candidates
+    outcomes: Outcomes
+    table: SurvivorTable
+    info: InformationScores
+    motion: np.ndarray
+    truncated: bool = False
+
+
+def as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
+    return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng or 0)
+
+
+def models_by_name(models: Mapping[str, ObjectModel] | Sequence[ObjectModel]) -> dict:
+    return dict(models) if isinstance(models, Mapping) else {m.name: m for m in models}
+
+
+def analyse(
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel] | Sequence[ObjectModel],
+    sensor: SensorBounds,
+    workspace: Workspace,
+    sensor_position: Sequence[float],
+    config: StrategyConfig | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    observations: Sequence[Observation] = (),
+    extra_paths: Sequence[SensingPath] = (),
+    deadline: Deadline | None = None,
+) -> Analysis:
+    """Candidates (the strategy's own first, then `extra_paths`, then the general
+    set), their predicted outcomes, survivor sets and scores (world frame).
+
+    With a `deadline`, outcomes are worked out block by block of candidates and
+    stop (`truncated`) once it passes; the first block is always done."""
+    config = config or StrategyConfig()
+    gen = as_generator(rng)
+    by_name = models_by_name(models)
+    posed = pose_hypotheses(hypotheses, by_name)
+    contacts = [o.contact for o in observations if o.contact is not None]
+    own = strategy_paths(
+        config, hypotheses, by_name, posed, contacts, workspace, sensor, sensor_position, gen
+    )
+    cands = generate_candidates(
+        posed,
+        workspace,
+        sensor,
+        config.candidates,
+        gen,
+        sensor_position=sensor_position,
+        extra=Candidates.concat([own, Candidates.from_paths(list(extra_paths))]),
+    )
+    fresh = np.flatnonzero(~repeated_paths(cands, observations, posed, sensor))
+    if 0 < len(fresh) < len(cands):
+        cands = cands.subset(fresh)
+    outcomes: list[Outcomes] = []
+    bits: list[np.ndarray] = []
+    deadline = deadline or Deadline()
+    # anytime: candidates in blocks, best first (the strategy's own, extra, general);
+    # when the budget runs out, the blocks done so far are the candidates
+    size = max(_BLOCK, _BLOCK_ELEMENTS // len(posed))
+    block = len(cands) if deadline.end == np.inf else size
+    for lo in range(0, max(len(cands), 1), max(block, 1)):
+        if outcomes and deadline.expired():
+            break
+        part = cands.subset(np.arange(lo, min(lo + block, len(cands))))
+        outcomes.append(
+            predict_outcomes(
+                posed, part.origins, part.directions, part.lengths, sensor, config.outcome
+            )
+        )
+        bits.append(
+            pin_families(
+                hypotheses,
+                posed,
+                outcomes[-1],
+                class_bits(posed, outcomes[-1], sensor, config.outcome),
+                sensor,
+            )
+        )
+    found = Outcomes.concat(outcomes)
+    truncated = len(found.hit) < len(cands)
+    cands = cands.subset(np.arange(len(found.hit)))
+    table = SurvivorTable.from_bits(np.concatenate(bits), posed.class_weight)
+    motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
+    info = information_scores(table)
+    return Analysis(posed, cands, found, table, info, motion, truncated)

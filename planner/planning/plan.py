@@ -1,0 +1,246 @@
+"""The planner's entry point (DESIGN §4.12, §6): a session in, a ranked plan out.
+
+:func:`plan` is a pure function: hypotheses (with probabilities and equivalence
+classes), the object models, sensor error bounds, the safe circle and the
+sensor's place in, a ranked :class:`~planner.planning.result.Plan` out. It runs
+in three steps, each usable alone: :func:`~planner.planning.analysis.analyse`
+(candidates, outcome model, survivor sets, scores),
+:func:`~planner.planning.strategies.rank_candidates` (the strategy, on the
+outcome matrix only) and the assembly of the plan. :func:`plan_session` plans on
+a session's state and adds the recognition's own forecast of the best paths.
+All geometry is in the world frame, lengths in the object files' unit, angles in
+radians.
+"""
+
+from __future__ import annotations
+
+import time
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+import numpy as np
+
+from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
+from planner.planning.budget import Deadline
+from planner.planning.config import StrategyConfig
+from planner.planning.forecast import with_forecast
+from planner.planning.probes import opening_probe
+from planner.planning.refinement import refinement, scores_after
+from planner.planning.result import REFINING, Plan, PlannedPath
+from planner.planning.scoring import FAMILIES, InformationScores
+from planner.planning.strategies import Ranking, rank_candidates
+from planner.recognition.session import Session
+from planner.types import (
+    Contact,
+    Hypothesis,
+    ObjectModel,
+    Observation,
+    SensingPath,
+    SensorBounds,
+    Workspace,
+)
+
+__all__ = ["plan", "plan_session"]
+
+#: Smallest share of the expected error disk a refining path must remove.
+_REFINE_GAIN = 0.05
+
+
+def plan_session(
+    session: Session,
+    sensor_position: Sequence[float],
+    config: StrategyConfig | None = None,
+    rng: np.random.Generator | int | None = None,
+) -> Plan:
+    """:func:`plan` on a session's state, its first
+    `config.forecast` paths forecast within the same time budget."""
+    config = config or StrategyConfig()
+    result = plan(
+        session.hypotheses,
+        session.models,
+        session.sensor,
+        session.workspace,
+        sensor_position,
+        config,
+        rng,
+        observations=session.observations,
+    )
+    return with_forecast(result, session, config.forecast, config.budget_ms, config.outcome)
+
+
+def plan(
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel] | Sequence[ObjectModel],
+    sensor: SensorBounds,
+    workspace: Workspace,
+    sensor_position: Sequence[float],
+    config: StrategyConfig | None = None,
+    rng: np.random.Generator | int | None = None,
+    *,
+    observations: Sequence[Observation] = (),
+    extra_paths: Sequence[SensingPath] = (),
+) -> Plan:
+    """Rank the next sensing paths for a hypothesis set (world frame).
+
+    `hypotheses` carry probabilities (normalized here) and equivalence classes;
+    `observations` (the session's, in order) tell whether anything was touched
+    yet and give the contacts the thesis opening needs; `extra_paths` join the
+    candidates; `rng` (or a seed; default 0) drives the random choices. The
+    time budget (`config.budget_ms`) covers the whole call.
+
+    With no hypothesis and no contact the plan is the opening probe (status
+    ``awaiting_contact``); with one class left it is empty (``localized``);
+    with contacts but no hypothesis, empty (``inconsistent``); otherwise the
+    ranked informative paths (``ambiguous``), empty with a note when no
+    candidate is informative.
+    """
+    start = time.perf_counter()
+    config = config or StrategyConfig()
+    gen = as_generator(rng)
+    deadline = Deadline.after_ms(config.budget_ms)
+    contacts = [o.contact for o in observations if o.contact is not None]
+
+    def finish(status: str, paths: Sequence[PlannedPath], **kw: Any) -> Plan:
+        elapsed = (time.perf_counter() - start) * 1000.0
+        return Plan(status, kw.pop("truncated", False), elapsed, tuple(paths), config.name, **kw)
+
+    if not hypotheses:
+        if contacts:
+            return finish("inconsistent", (), note="no hypothesis explains the contacts")
+        missed = [o.path for o in observations]
+        probe = opening_probe(
+            config, models_by_name(models), workspace, sensor_position, missed, gen
+        )
+        return finish("awaiting_contact", (probe,))
+    classes = len({h.equivalence_class for h in hypotheses})
+    if classes == 1:
+        return finish("localized", (), classes=1)
+    found = analyse(
+        hypotheses,
+        models,
+        sensor,
+        workspace,
+        sensor_position,
+        config,
+        gen,
+        observations=observations,
+        extra_paths=extra_paths,
+        deadline=deadline,
+    )
+    ranking = rank_candidates(
+        found.table,
+        config,
+        info=found.info,
+        motion=found.motion,
+        source=found.candidates.source,
+        tier=found.candidates.tier,
+        rng=gen,
+        deadline=deadline,
+    )
+    paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
+    note = ranking.note
+    if not paths:
+        paths, note = _refining(
+            found, hypotheses, models_by_name(models), contacts, sensor, ranking, config
+        )
+    if not paths and config.name == "thesis":
+        paths, note = _thesis_window(found, ranking, config, gen, note)
+    if found.truncated:
+        note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
+    return finish(
+        "ambiguous",
+        paths,
+        truncated=ranking.truncated or found.truncated,
+        note=note,
+        candidates=len(found.candidates),
+        classes=found.table.n_classes,
+    )
+
+
+def _thesis_window(
+    found: Analysis,
+    ranking: Ranking,
+    config: StrategyConfig,
+    rng: np.random.Generator,
+    note: str | None,
+) -> tuple[list[PlannedPath], str | None]:
+    """The thesis takes its best window whatever a finer model predicts of it (it
+    raised the admitted strength until one opened): the first in CHOOSE order, or
+    a random one of the lowest level; none when the grid found no window."""
+    windows = np.flatnonzero(found.candidates.source == "window")
+    if not len(windows):
+        return [], note
+    if config.thesis_choice == "random":
+        tier = found.candidates.tier[windows]
+        windows = rng.permutation(windows[tier == tier.min()])
+    said = "the thesis' best window, though not informative"
+    return [_planned(found, int(windows[0]), ranking)], "; ".join(filter(None, [note, said]))
+
+
+def _refining(
+    found: Analysis,
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    contacts: Sequence[Contact],
+    sensor: SensorBounds,
+    ranking: Ranking,
+    config: StrategyConfig,
+) -> tuple[list[PlannedPath], str | None]:
+    """No informative path: the paths that shrink the expected error disk most
+    (at least by `_REFINE_GAIN` of it), with a note saying so. Their scores are
+    those of the outcome model with the disks each class is predicted to have
+    once the touch is made (with today's disks every outcome is confusable)."""
+    refine = refinement(hypotheses, models, found.posed, found.outcomes, contacts, sensor)
+    gain = refine.current - refine.expected
+    ok = np.flatnonzero(gain > _REFINE_GAIN * refine.current)
+    if not len(ok):
+        return [], ranking.note
+    order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]
+    paths = []
+    for i in order:
+        info = scores_after(
+            hypotheses, found.posed, refine, found.candidates, int(i), sensor, config.outcome
+        )
+        paths.append(
+            _planned(
+                found,
+                int(i),
+                ranking,
+                family=REFINING,
+                expected_eps_t=refine.expected[i],
+                scores=(info, 0),
+            )
+        )
+    note = (
+        f"{ranking.note}: refining the pose instead "
+        f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
+    )
+    return paths, note
+
+
+def _planned(
+    found: Analysis,
+    i: int,
+    ranking: Ranking,
+    family: str | None = None,
+    expected_eps_t: float | None = None,
+    scores: tuple[InformationScores, int] | None = None,
+) -> PlannedPath:
+    """Candidate `i` as a planned path; `scores` (information scores, row) replace
+    the analysis' own for that path."""
+    c = found.candidates
+    info, j = scores if scores is not None else (found.info, i)
+    return PlannedPath(
+        origin=(float(c.origins[i, 0]), float(c.origins[i, 1])),
+        direction=(float(c.directions[i, 0]), float(c.directions[i, 1])),
+        length=float(c.lengths[i]),
+        aim=(float(c.aims[i, 0]), float(c.aims[i, 1])),
+        family=family or FAMILIES[int(info.family[j])],
+        p_distinguishing=float(info.p_distinguishing[j]),
+        p_informative=float(info.p_informative[j]),
+        expected_pruning=float(info.expected_pruning[j]),
+        expected_remaining=float(ranking.expected_remaining[i]),
+        motion_cost=float(found.motion[i]),
+        source=str(c.source[i]),
+        expected_eps_t=None if expected_eps_t is None else float(expected_eps_t),
+    )

@@ -1,0 +1,280 @@
+"""Paths a strategy brings of its own (world frame, lengths in the object files' unit).
+
+The opening probe before any contact (from the sensor's place toward the
+centre; ``random``: from a random place), the thesis' second probe orthogonal
+to the first contact normal (thesis §3.1, Exp. II), random draws aimed at the
+centre of the union area (thesis Exp. I), and the thesis' grid windows from
+:func:`planner.image.grid.thesis_paths`.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import Counter
+from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.errors import PlanningNotPossibleError
+from planner.geometry import rotation_matrices
+from planner.models.prior import draw_poses, draw_stable_poses
+from planner.planning.candidates import Candidates, paths_through, union_centre
+from planner.planning.posed_set import PosedSet
+from planner.planning.result import PlannedPath, opening_path
+from planner.planning.scoring import motion_cost
+from planner.types import Contact, Hypothesis, ObjectModel, SensingPath, SensorBounds, Workspace
+
+if TYPE_CHECKING:
+    from planner.planning.config import StrategyConfig
+
+__all__ = ["opening_probe", "search_chord", "strategy_paths"]
+
+
+def opening_probe(
+    config: StrategyConfig,
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    sensor_position: Sequence[float],
+    missed: Sequence[SensingPath],
+    rng: np.random.Generator,
+) -> PlannedPath:
+    """Before any contact. The first probe runs from the sensor's place through the
+    centre (``random``: from a random place, every time); after `missed` paths, the
+    chord most likely to meet the object (:func:`search_chord`)."""
+    aim = (float(workspace.center[0]), float(workspace.center[1]))
+    if config.name == "random":
+        path = opening_path(workspace, sensor_position, angle=float(rng.uniform(-math.pi, math.pi)))
+    elif not missed:
+        path = opening_path(workspace, sensor_position)
+    else:
+        path, aim = search_chord(models, workspace, missed, sensor_position)
+    cost = motion_cost(
+        np.array([path.origin]), np.array([path.length / 2]), workspace, sensor_position
+    )[0]
+    # nothing is known yet: any contact teaches something, none can be predicted
+    return PlannedPath(
+        origin=path.origin,
+        direction=path.direction,
+        length=path.length,
+        aim=aim,
+        family="informative",
+        p_distinguishing=0.0,
+        p_informative=1.0,
+        expected_pruning=0.0,
+        expected_remaining=None,
+        motion_cost=float(cost),
+        source="opening",
+    )
+
+
+def search_chord(
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    missed: Sequence[SensingPath],
+    sensor_position: Sequence[float],
+    samples: int = 4096,
+    angles: int = 36,
+    offsets: int = 41,
+) -> tuple[SensingPath, tuple[float, float]]:
+    """The chord of the safe circle most likely to meet the object after `missed` paths.
+
+    Prior: the object (by its prior), stable pose (by its probability), orientation
+    uniform, position uniform among those keeping it inside the safe circle, as
+    `samples` fixed draws. A draw that one of the `missed` paths would have met is
+    ruled out. A chord (normal angle a, offset rho from the centre) meets a draw's
+    outline exactly when rho lies strictly between the outline's least and greatest
+    projection on the normal; the chord meeting the most surviving draws wins
+    (ties: the least motion from the sensor's place). With no draw left (the prior
+    was wrong), chords through the centre turn by the golden angle per miss.
+    Returns the path (origin on the circle, through to the far side) and its midpoint.
+
+    >>> from planner.models.library import object_from_dict
+    >>> sq = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+    >>> first = SensingPath((50.0, 0.0), (-1.0, 0.0), 100.0)
+    >>> path, aim = search_chord({"sq": sq}, Workspace((0, 0), 50), [first], (50, 0))
+    >>> abs(aim[1]) > 5 or abs(aim[0]) > 5   # off the band the first chord swept
+    True
+    """
+    centre = np.asarray(workspace.center, dtype=float)
+    R = workspace.radius
+    alpha = np.arange(angles) * math.pi / angles
+    normal = np.stack([np.cos(alpha), np.sin(alpha)], axis=1)  # (A, 2)
+    lo, hi = _prior_extents(models, workspace, missed, normal, samples)  # (N, A)
+    if not len(lo):
+        return opening_path(workspace, sensor_position, len(missed)), (
+            float(centre[0]),
+            float(centre[1]),
+        )
+    rho = np.linspace(-R, R, offsets + 2)[1:-1]  # (O,)
+    # share of the surviving draws met: lo < rho < hi
+    inside = (lo.T[:, None, :] < rho[None, :, None]) & (rho[None, :, None] < hi.T[:, None, :])
+    score = inside.mean(axis=2).ravel()  # (A * O,)
+    a_idx, o_idx = np.divmod(np.arange(score.size), len(rho))
+    half = np.sqrt(R**2 - rho[o_idx] ** 2)
+    n = normal[a_idx]
+    t = np.stack([-n[:, 1], n[:, 0]], axis=1)
+    mid = centre + rho[o_idx, None] * n
+    # both ways along each chord: origin at one end, heading to the other
+    origins = np.concatenate([mid - half[:, None] * t, mid + half[:, None] * t])
+    heading = np.concatenate([t, -t])
+    cost = motion_cost(origins, np.concatenate([half, half]), workspace, sensor_position)
+    best = int(np.lexsort((cost, -np.concatenate([score, score])))[0])
+    k = best % len(score)
+    path = SensingPath(
+        (float(origins[best, 0]), float(origins[best, 1])),
+        (float(heading[best, 0]), float(heading[best, 1])),
+        float(2 * half[k]),
+    )
+    return path, (float(mid[k, 0]), float(mid[k, 1]))
+
+
+def _prior_extents(
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    missed: Sequence[SensingPath],
+    normal: np.ndarray,
+    samples: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
+    centre, of the prior draws of the posed outline that no `missed` path meets."""
+    a = np.array([p.origin for p in missed], dtype=float)  # (M, 2) missed segments a -> b
+    b = a + np.array([np.multiply(p.length, p.direction) for p in missed], dtype=float)
+    centre = np.asarray(workspace.center, dtype=float)
+    lo, hi = [], []
+    for posed in _prior_draws(models, workspace, samples):
+        # a segment meets an outline it starts outside of exactly when it crosses a face
+        s, e = posed[:, :, None, :], np.roll(posed, -1, axis=1)[:, :, None, :]  # (n, V, 1, 2)
+        crosses = (_turn(a, b, s) * _turn(a, b, e) <= 0) & (_turn(s, e, a) * _turn(s, e, b) <= 0)
+        met = crosses.any(axis=(1, 2))
+        proj = (posed[~met] - centre) @ normal.T  # (n, V, A)
+        lo.append(proj.min(axis=1))
+        hi.append(proj.max(axis=1))
+    return np.concatenate(lo), np.concatenate(hi)
+
+
+def _turn(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
+    """Sign of the turn p -> q -> r (cross product of q - p and r - p), broadcast."""
+    return np.sign(
+        (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
+        - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
+    )
+
+
+#: Prior draws per (objects, safe circle, count): fixed, so kept (with their objects,
+#: which keeps the ids in the key valid).
+_DRAWS: dict[tuple, tuple[list, list[np.ndarray]]] = {}
+
+
+def _prior_draws(
+    models: Mapping[str, ObjectModel], workspace: Workspace, samples: int
+) -> list[np.ndarray]:
+    """`samples` fixed draws of the posed outline from the prior, grouped by stable
+    pose: a list of (n, V, 2) world vertex arrays."""
+    items = list(models.values())
+    key = (tuple(id(m) for m in items), workspace.center, workspace.radius, samples)
+    if key not in _DRAWS:
+        rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
+        drawn = Counter(draw_stable_poses(items, samples, rng))
+        groups = []
+        for (i, j), n in sorted(drawn.items()):
+            stable = items[i].stable_poses[j]
+            theta, t = draw_poses(stable, workspace, n, rng)
+            # v_world = R(theta) v + t
+            groups.append(
+                np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
+            )
+        if len(_DRAWS) >= 16:
+            _DRAWS.pop(next(iter(_DRAWS)))
+        _DRAWS[key] = (items, groups)
+    return _DRAWS[key][1]
+
+
+def _chords(aim: np.ndarray, angles: np.ndarray, workspace: Workspace, source: str) -> Candidates:
+    """Paths from origins on the safe circle (at `angles` about the centre) through
+    `aim` to the far side of the circle."""
+    centre = np.asarray(workspace.center, dtype=float)
+    origins = centre + workspace.radius * np.stack([np.cos(angles), np.sin(angles)], axis=1)
+    span = aim - origins
+    dist = np.hypot(*span.T)
+    d = span / np.maximum(dist, 1e-300)[:, None]
+    # a chord from o along unit d on the circle |x - c| = R has length 2 d.(c - o)
+    lengths = 2 * np.einsum("nk,nk->n", d, centre - origins)
+    ok = (dist > 1e-9 * workspace.radius) & (lengths > 1e-9 * workspace.radius)
+    return Candidates(
+        origins[ok],
+        d[ok],
+        lengths[ok],
+        np.repeat(aim[None], ok.sum(), 0),
+        np.full(int(ok.sum()), source, dtype="<U12"),
+    )
+
+
+def strategy_paths(
+    config: StrategyConfig,
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    posed: PosedSet,
+    contacts: Sequence[Contact],
+    workspace: Workspace,
+    sensor: SensorBounds,
+    sensor_position: Sequence[float],
+    rng: np.random.Generator,
+) -> Candidates:
+    """Candidates a strategy brings of its own: random draws, thesis probes and windows."""
+    parallel = _parallel(contacts, sensor)
+    if config.name == "random" or (config.name == "thesis" and parallel > 1):
+        # thesis Exp. I: a random origin on the safe circle, aimed at the union area's centre
+        draws = config.random_draws if config.name == "random" else 1
+        angles = rng.uniform(-math.pi, math.pi, draws)
+        return _chords(union_centre(posed), angles, workspace, "random")
+    if config.name != "thesis":
+        return Candidates.empty()
+    if parallel == 1:
+        return _orthogonal_probe(contacts[0], posed, workspace, sensor_position)
+    from planner.image.grid import thesis_paths
+
+    # windows in CHOOSE order: admitted blocking strength, then nearest origin
+    try:
+        windows = thesis_paths(hypotheses, models, workspace, sensor_position, config.grid_size)
+    except PlanningNotPossibleError:  # e.g. an intersection area outside the safe circle
+        return Candidates.empty()  # the thesis strategy then falls back, saying so
+    return Candidates.from_paths(
+        [w.path for w in windows],
+        source="window",
+        aims=np.array([w.aim for w in windows]).reshape(-1, 2),
+        tier=np.array([w.level for w in windows], dtype=int),
+    )
+
+
+def _parallel(contacts: Sequence[Contact], sensor: SensorBounds) -> int:
+    """Number of contacts when all their normals are parallel (within 2 phi), else 0."""
+    if not contacts:
+        return 0
+    normals = np.array([c.normal for c in contacts])
+    cos_tol = math.cos(2 * sensor.normal_error + 1e-6)
+    return len(contacts) if np.all(np.abs(normals @ normals[0]) >= cos_tol) else 0
+
+
+def _orthogonal_probe(
+    contact: Contact, posed: PosedSet, workspace: Workspace, sensor_position: Sequence[float]
+) -> Candidates:
+    """Thesis §3.1: the second probe runs orthogonal to the first contact normal,
+    across the envelope of translations, through the depth of the union's centre."""
+    n, p = np.asarray(contact.normal), np.asarray(contact.point)
+    depth = max(float((p - union_centre(posed)) @ n), 1e-6 * workspace.radius)
+    aim = p - depth * n
+    both = np.array([[-n[1], n[0]], [n[1], -n[0]]])
+    origins, _, chord = paths_through(np.repeat(aim[None], 2, 0), both, workspace)
+    ok = np.isfinite(chord)
+    if not ok.any():
+        return Candidates.empty()
+    cost = motion_cost(np.nan_to_num(origins), np.zeros(2), workspace, sensor_position)
+    i = int(np.argmin(np.where(ok, cost, np.inf)))
+    return Candidates(
+        origins[i : i + 1],
+        both[i : i + 1],
+        chord[i : i + 1],
+        aim[None],
+        np.array(["probe"], dtype="<U12"),
+    )

@@ -1,0 +1,123 @@
+"""Where the outcome model must follow what the recognition will do (DESIGN §4.11).
+
+The outcome model predicts, per path and hypothesis, what a touch would measure
+and which hypotheses would survive it. Two things the recognition does are not
+visible in single outcomes and are applied here, both in the world frame:
+
+- a slide family (touched faces all parallel, DESIGN §4.6) is re-fitted as one
+  determined pose once a contact lands on a face not parallel to them, so its
+  samples are told apart by such a path (:func:`pin_families`);
+- an observation already made has been checked against every hypothesis still
+  standing, so a path repeating it measures nothing new (:func:`repeated_paths`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+
+from planner.planning.candidates import Candidates
+from planner.planning.outcomes import Outcomes
+from planner.planning.posed_set import PosedSet
+from planner.types import Hypothesis, Observation, SensorBounds
+
+__all__ = ["pin_families", "repeated_paths"]
+
+
+def pin_families(
+    hypotheses: Sequence[Hypothesis],
+    posed: PosedSet,
+    outcomes: Outcomes,
+    bits: np.ndarray,
+    sensor: SensorBounds,
+) -> np.ndarray:
+    """Survivor bits (C, K, W) with the samples of one slide family told apart
+    where a path pins the family.
+
+    A family (touched faces all parallel, DESIGN §4.6) is sampled along its slide,
+    one class per sample. When a path meets two samples surely (no alternative
+    outcome, :attr:`Outcomes.uncertain`) on the same face, not parallel to the touched ones, the
+    contact fixes the slide: the family becomes one determined pose, the sample
+    the truth is, and the other sample does not survive as a class of its own.
+    Their disks (which carry the sample spacing) would otherwise call them
+    confusable, and the touch that ends the family would never look
+    distinguishing.
+    """
+    # a family: one interpretation (object, stable pose, faces touched, all parallel)
+    tol = math.sin(2 * sensor.normal_error + 1e-6)
+    assigned = np.array([[-1 if a is None else a for a in h.assignment] for h in hypotheses])
+    if assigned.size == 0:
+        return bits
+    on = assigned >= 0
+    first = np.argmax(on, axis=1)
+    rows = np.arange(len(hypotheses))
+    n = posed.normal[rows[:, None], np.maximum(assigned, 0)]  # (H, s, 2)
+    u = n[rows, first]  # (H, 2): a touched face's posed normal
+    cross = np.abs(n[..., 0] * u[:, None, 1] - n[..., 1] * u[:, None, 0])
+    parallel = on.any(axis=1) & np.all(~on | (cross <= tol), axis=1)
+    ident: dict[tuple, int] = {}
+    label = [ident.setdefault((h.family, h.object, h.stable_pose), len(ident)) for h in hypotheses]
+    _, family = np.unique(np.column_stack([label, assigned]), axis=0, return_inverse=True)
+    family = np.where(parallel, family.ravel(), -1)
+    members = np.bincount(posed.cls, minlength=posed.n_classes)
+    # classes of one hypothesis, sampled from a family with siblings
+    solo = (members[posed.cls] == 1) & (family >= 0)
+    siblings = np.unique(family[solo], return_counts=True)
+    shared = siblings[0][siblings[1] > 1]
+    if not len(shared):
+        return bits
+    bits = bits.copy()
+    sure = outcomes.hit & ~outcomes.uncertain  # (C, H)
+    for f in shared:
+        hs = np.flatnonzero(solo & (family == f))
+        hit_n = outcomes.normal[:, hs]  # (C, S, 2)
+        un = u[hs[0]]  # the family's touched faces are all parallel to it
+        pins = sure[:, hs] & (np.abs(hit_n[..., 0] * un[1] - hit_n[..., 1] * un[0]) > tol)
+        same = (outcomes.face[:, hs, None] == outcomes.face[:, None, hs]) & (
+            pins[:, :, None] & pins[:, None, :]
+        )  # (C, S, S): the sample pair is pinned apart on that path
+        for b, h in enumerate(hs):
+            k = int(posed.cls[h])
+            word, bit = k // 64, np.uint64(1) << np.uint64(k % 64)
+            classes = posed.cls[hs]
+            apart = same[:, :, b]
+            apart[:, b] = False
+            bits[:, classes, word] &= np.where(apart, ~bit, ~np.uint64(0))
+    return bits
+
+
+def repeated_paths(
+    cands: Candidates,
+    observations: Sequence[Observation],
+    posed: PosedSet,
+    sensor: SensorBounds,
+) -> np.ndarray:
+    """(C,) bool: does each candidate repeat a path already taken?
+
+    A candidate repeats an observation when it runs the same way (directions
+    within ``2 phi``) along the same line (within ``2 eps_d + min eps_t / 2`` of the
+    observed contact, or of a missed path's point nearest the candidate's aim).
+    Every hypothesis still standing agreed with that observation within its
+    tolerances, so the repeat can only measure it again: it teaches nothing the
+    outcome model could count on (with errors, taking it again loops).
+    """
+    out = np.zeros(len(cands), dtype=bool)
+    if not len(cands) or not observations:
+        return out
+    eps_d, phi = sensor.position_error, sensor.normal_error
+    reach = 2 * eps_d + float(posed.eps_t.min()) / 2 + 1e-9 * posed.scale
+    d = cands.directions
+    for obs in observations:
+        o, u = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
+        same_way = d @ u >= np.cos(2 * phi + 1e-9)
+        if obs.contact is not None:
+            x = np.broadcast_to(np.asarray(obs.contact.point, dtype=float), d.shape)
+        else:  # the missed path's point nearest each candidate's aim
+            along = np.clip((cands.aims - o) @ u, 0.0, obs.path.length)
+            x = o + along[:, None] * u
+        rel = x - cands.origins
+        off = np.abs(rel[:, 0] * d[:, 1] - rel[:, 1] * d[:, 0])
+        out |= same_way & (off <= reach)
+    return out

@@ -1,0 +1,330 @@
+"""The set of poses consistent with the contacts (set membership, DESIGN §4.4).
+
+A pose ``(t', theta')`` is consistent when every assigned contact's normal lies
+within phi of its face's posed normal and its point within eps_d of the face's
+posed line. For a fixed theta' the consistent translations form a convex
+polygon (slabs); theta' runs over the interval the normals allow. From that set:
+sound error bounds that need no linearization (:func:`consistent_set_bounds`),
+its volume, the bounded-error likelihood of the contacts
+(:func:`consistent_volume`), and poses spread over it (:func:`consistent_poses`).
+
+World frame, lengths in the object files' unit, angles in radians.
+"""
+
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.geometry import rotation_matrices, wrap_angle
+
+__all__ = ["ConsistentSet", "consistent_poses", "consistent_set_bounds", "consistent_volume"]
+
+
+@dataclass(frozen=True, eq=False)
+class ConsistentSet:
+    """What the set of poses consistent with the contacts says, per row (K,):
+    `moved` (K, P) the largest displacement of each model point from the fit,
+    `dtheta` the largest rotation from it (both inf where unknown), and `feasible`,
+    False only where no pose at all is consistent (the interpretation is impossible
+    while the errors stay within their bounds)."""
+
+    moved: np.ndarray
+    dtheta: np.ndarray
+    feasible: np.ndarray
+
+
+def consistent_set_bounds(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    model_points: np.ndarray,
+    eps_d: float,
+    phi: float,
+    samples: int = 25,
+    max_contacts: int = 7,
+) -> ConsistentSet:
+    """Largest displacement of model points over every pose CONSISTENT with the
+    contacts (set membership), for determined poses; no linearization.
+
+    A pose ``(t', theta')`` is consistent when every assigned contact's normal lies
+    within phi of its face's posed normal, ``|psi_j - theta' - angle(n_a)| <= phi``
+    (an interval of theta'), and its measured point lies within eps_d of the face's
+    posed line, ``|n'_j·(p_j - t') - d_a| <= eps_d`` with ``n'_j = R(theta') n_a``:
+    for a fixed theta' that is a polygon of t' (slabs), bounded when two faces are
+    not parallel. theta' is sampled across its interval, `samples` points a step
+    ``delta`` apart; every theta' lies within ``delta / 2`` of a sample, and there
+    its slabs lie inside the sample's slabs widened by ``lever delta / 2``
+    (``lever`` = the outline's radius about the model origin plus eps_d, the
+    farthest a contact can be from t'). The displacement ``|R(theta') v + t' - (R(theta) v + t)|``
+    of a model point v is convex in t', so its maximum over a widened polygon is at
+    a vertex; ``|v| delta / 2`` covers the rotation between samples. Every pose
+    consistent with the contacts is thereby covered: the bounds are sound, and
+    when no widened polygon holds a point the interpretation is impossible. Unlike
+    the estimator's worst case (:func:`planner.recognition.pose_fit.point_bounds`),
+    errors do not add up: every contact shrinks the set.
+
+    `points`, `normals` (s, 2) measured, or (K, s, 2) per row; `face_normals`
+    (K, s, 2), `face_offsets` (K, s), `assigned` (K, s) as for :func:`fit_batch`;
+    `theta` (K,), `t` (K, 2) the fits; `model_points` (P, 2), the outline's
+    vertices among them. Rows whose latest `max_contacts` assigned contacts hold no
+    two non-parallel faces are unknown (inf, feasible): the polygon is unbounded.
+    """
+    K, s = assigned.shape
+    P = len(model_points)
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
+    moved = np.full((K, P), np.inf)
+    dth = np.full(K, np.inf)
+    feasible = np.ones(K, dtype=bool)
+    if K == 0 or s < 2:
+        return ConsistentSet(moved, dth, feasible)
+    from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
+    use = assigned & (from_end <= max_contacts)
+    slack = 1e-9  # rounding of the measured angles
+    lo, hi = _theta_interval(normals, face_normals, use, theta, phi + slack)
+    lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
+    per_row = samples * s * (s - 1) * 2 * max(P, s)
+    chunk = max(1, 2_000_000 // per_row)
+    for k0 in range(0, K, chunk):
+        sl = slice(k0, min(K, k0 + chunk))
+        moved[sl], dth[sl], feasible[sl] = _sweep(
+            points[sl],
+            face_normals[sl],
+            face_offsets[sl],
+            use[sl],
+            theta[sl],
+            t[sl],
+            lo[sl],
+            hi[sl],
+            model_points,
+            eps_d,
+            lever,
+            samples,
+        )
+    return ConsistentSet(moved, dth, feasible)
+
+
+def _sweep(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    model_points: np.ndarray,
+    eps_d: float,
+    lever: float,
+    samples: int,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """:func:`consistent_set_bounds` on one chunk of rows."""
+    empty_range = hi < lo
+    span = np.where(empty_range, 0.0, hi - lo)
+    delta = span / (samples - 1)  # (K,) step between samples
+    d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)  # offsets from the fit
+    width = eps_d + lever * delta / 2  # (K,) slab half-width, widened for the step
+    vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, width)
+    bounded &= ~empty_range
+    ok &= ~empty_range[:, None, None]
+    # displacement of each model point: R' v + t' - (R v + t)
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
+    posed = np.einsum("knij,pj->knpi", R, model_points)  # (K, N, P, 2)
+    vert = np.stack([vx, vy], axis=-1)  # (K, N, V, 2) candidate translations t'
+    disp = vert[:, :, :, None, :] + posed[:, :, None] - fit_pts[:, None, None]
+    norm = np.where(ok[..., None], np.linalg.norm(disp, axis=-1), -np.inf)
+    radius = np.hypot(*np.asarray(model_points, dtype=float).T)  # (P,) |v|
+    moved = norm.max(axis=(1, 2)) + radius[None] * delta[:, None] / 2  # (K, P)
+    feasible = ok.any(axis=2)  # (K, N)
+    ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
+    dth = ang + delta / 2
+    some = feasible.any(axis=1)
+    unknown = ~bounded & ~empty_range
+    moved[~some | unknown] = np.inf
+    dth[~some | unknown] = np.inf
+    return moved, dth, some | unknown
+
+
+def consistent_volume(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    eps_d: float,
+    phi: float,
+    samples: int = 25,
+) -> np.ndarray:
+    """Volume (area x radians) of the set of poses consistent with the contacts,
+    per row (K,): the bounded-error likelihood of the contacts up to a constant
+    (uniform errors within eps_d and phi, uniform prior over the pose).
+
+    theta' runs over the interval the normals allow (as in
+    :func:`consistent_set_bounds`, `samples` points); at each sample the
+    translations keeping every assigned contact within eps_d of its face's posed
+    line form a convex polygon (slabs), whose area is the shoelace sum of its
+    vertices (the slab-edge crossings inside every slab) in angular order; the
+    trapezoid rule integrates over theta'. 0 where nothing is consistent or
+    eps_d is 0; inf where two non-parallel faces are missing (unbounded)."""
+    K, s = assigned.shape
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
+    volume = np.zeros(K)
+    if K == 0 or s < 2 or eps_d <= 0:
+        return np.full(K, np.inf) if s < 2 else volume
+    lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
+    chunk = max(1, 1_000_000 // (samples * s * s * 2 * s))
+    for k0 in range(0, K, chunk):
+        sl = slice(k0, min(K, k0 + chunk))
+        volume[sl] = _volume(
+            points[sl], face_normals[sl], face_offsets[sl], assigned[sl],
+            theta[sl], lo[sl], hi[sl], eps_d, samples,
+        )  # fmt: skip
+    return volume
+
+
+def _theta_interval(
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    phi: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(lo, hi) (K,): the rotations from the fit that keep every assigned measured
+    normal within phi of its face's posed normal (hi < lo: none)."""
+    psi = np.arctan2(normals[..., 1], normals[..., 0])
+    face_angle = np.arctan2(face_normals[..., 1], face_normals[..., 0])
+    r_ang = wrap_angle(psi - face_angle - theta[:, None])
+    lo = np.where(assigned, r_ang - phi, -np.inf).max(axis=1)
+    hi = np.where(assigned, r_ang + phi, np.inf).min(axis=1)
+    return lo, hi
+
+
+def _polygons(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    d_theta: np.ndarray,
+    width: float | np.ndarray,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]:
+    """The consistent translations at rotations ``theta + d_theta`` (K, N): the
+    convex polygon where every used contact lies within `width` (scalar or (K,))
+    of its face's posed line, as its candidate vertices (slab-edge crossings)
+    `vx`, `vy` (K, N, V), `ok` (K, N, V) for those inside every slab, and
+    `bounded` (K,): two non-parallel faces are used."""
+    s = use.shape[1]
+    pairs = np.array(np.triu_indices(s, 1)).T
+    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    n = np.einsum("knij,ksj->knsi", R, face_normals)
+    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    i, j = pairs[:, 0], pairs[:, 1]
+    a, b = n[:, :, i], n[:, :, j]
+    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    det = np.where(good, det, 1.0)
+    w = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None, None]
+    ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + w * sides[:, 1]
+    shape = (*det.shape[:2], -1)
+    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
+    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
+    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
+    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
+    inside = np.abs(proj - centre[:, :, None, :]) <= w + tol[:, :, None, :]
+    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
+    return vx, vy, ok, good.any(axis=(1, 2))
+
+
+def _volume(
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    use: np.ndarray,
+    theta: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    eps_d: float,
+    samples: int,
+) -> np.ndarray:
+    """:func:`consistent_volume` on one chunk of rows."""
+    span = np.maximum(hi - lo, 0.0)
+    d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)
+    vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, eps_d)
+    # the polygon: its vertices in angular order about their mean, shoelace
+    count = ok.sum(axis=-1)
+    mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    my = np.where(ok, vy, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    ang = np.where(ok, np.arctan2(vy - my[..., None], vx - mx[..., None]), np.inf)
+    order = np.argsort(ang, axis=-1)
+    sx = np.take_along_axis(np.where(ok, vx, np.nan), order, axis=-1)
+    sy = np.take_along_axis(np.where(ok, vy, np.nan), order, axis=-1)
+    # close each polygon: the last valid vertex is followed by the first
+    last = np.maximum(count - 1, 0)
+    idx = np.arange(sx.shape[-1])
+    wrap = idx == last[..., None]
+    nx_ = np.where(wrap, sx[..., :1], np.roll(sx, -1, axis=-1))
+    ny_ = np.where(wrap, sy[..., :1], np.roll(sy, -1, axis=-1))
+    cross = np.where(idx < count[..., None], sx * ny_ - sy * nx_, 0.0)
+    area = np.where(count >= 3, np.abs(np.nansum(cross, axis=-1)) / 2, 0.0)  # (K, N)
+    step = span / (samples - 1)
+    volume = (area.sum(axis=1) - (area[:, 0] + area[:, -1]) / 2) * step
+    return np.where(bounded, volume, np.inf)
+
+
+@functools.lru_cache(maxsize=32)
+def _mix(vertices: int, count: int = 8) -> np.ndarray:
+    """Fixed mixing weights of the consistent-set samples (recognition must be a
+    function of its inputs): `count` Dirichlet(1, ..., 1) draws over `vertices`."""
+    return np.random.default_rng(vertices).dirichlet(np.ones(vertices), size=count)
+
+
+def consistent_poses(
+    points: np.ndarray,
+    normals: np.ndarray,
+    face_normals: np.ndarray,
+    face_offsets: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    eps_d: float,
+    phi: float,
+    rotations: int = 4,
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Poses spread over the set consistent with the contacts, per row: at
+    `rotations` rotations across the interval the normals allow (cell midpoints),
+    fixed convex mixtures of the polygon's vertices (inside it, the polygon
+    being convex). Returns theta' (K, M), t' (K, M, 2) and `valid` (K, M) (False
+    where the polygon is empty or unbounded)."""
+    K, s = assigned.shape
+    points = np.broadcast_to(points, (K, s, 2))
+    normals = np.broadcast_to(normals, (K, s, 2))
+    lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
+    span = np.maximum(hi - lo, 0.0)
+    d_theta = lo[:, None] + span[:, None] * (np.arange(rotations) + 0.5) / rotations
+    vx, vy, ok, bounded = _polygons(
+        points, face_normals, face_offsets, assigned, theta, d_theta, eps_d
+    )
+    V = vx.shape[-1]
+    mix = _mix(V)[None, None] * ok[:, :, None, :]  # (K, N, S, V)
+    total = mix.sum(axis=-1)
+    mix = mix / np.where(total > 0, total, 1.0)[..., None]
+    tx = np.einsum("knsv,knv->kns", mix, np.where(ok, vx, 0.0))
+    ty = np.einsum("knsv,knv->kns", mix, np.where(ok, vy, 0.0))
+    valid = (total > 0) & bounded[:, None, None] & (hi >= lo)[:, None, None]
+    th = np.broadcast_to((theta[:, None] + d_theta)[:, :, None], tx.shape)
+    return (
+        th.reshape(K, -1),
+        np.stack([tx, ty], axis=-1).reshape(K, -1, 2),
+        valid.reshape(K, -1),
+    )

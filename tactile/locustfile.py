@@ -1,0 +1,138 @@
+"""Locust fleet: simulated robots, each running whole recognitions against the service.
+
+Two kinds of robot (pick one by class name on the locust command line; both by
+default):
+
+- :class:`Robot` creates a session on a shared object set, asks for the plan,
+  executes the best path against its own simulated world, posts the observation,
+  and repeats until the session is localized (or a touch limit);
+- :class:`Prober` posts observations only: random paths aimed at its object
+  (no plan asked), until localized or the touch limit. It measures what the
+  observation endpoint sustains by itself.
+
+Run through ``python -m tactile.loadtest``. ``LOADTEST_KEEPALIVE=0`` opens a
+connection per request. Observations are posted with
+``?limit=LOADTEST_HYPOTHESES`` (default: no limit, the whole hypothesis list).
+The robots use locust's geventhttpclient user (keep-alive, far less CPU per
+request than python-requests), which matters when locust shares the machine.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+import os
+from importlib import resources
+from typing import Any
+
+import numpy as np
+from locust import FastHttpUser, between, task
+
+from hardware_sim.world import World, random_world
+from planner.models.library import parse_objects
+from planner.types import Observation, SensingPath, SensorBounds, Workspace
+
+SET = os.environ.get("LOADTEST_OBJECTS", "thesis_like")
+OBJECTS = json.loads((resources.files("planner") / "data" / f"{SET}.json").read_text())["objects"]
+MODELS = parse_objects({"objects": OBJECTS})
+WORKSPACE = Workspace((0.0, 0.0), 200.0)
+BOUNDS = SensorBounds(1.0, math.radians(3.0))
+STRATEGY = {"name": os.environ.get("LOADTEST_STRATEGY", "pdm"), "budget_ms": 200}
+MAX_TOUCHES = 12
+HYPOTHESES = os.environ.get("LOADTEST_HYPOTHESES", "")
+OBSERVE_QUERY = f"?limit={int(HYPOTHESES)}" if HYPOTHESES else ""
+#: LOADTEST_KEEPALIVE=0: a new connection per request (with several workers, a
+#: session's requests then land on any worker, as behind a load balancer)
+KEEPALIVE = os.environ.get("LOADTEST_KEEPALIVE", "1") != "0"
+DONE = ("localized", "inconsistent")
+
+
+def _body(obs: Observation) -> dict[str, Any]:
+    path, contact = obs.path, obs.contact
+    return {
+        "path": {
+            "origin": list(path.origin),
+            "direction": list(path.direction),
+            "length": path.length,
+        },
+        "contact": None
+        if contact is None
+        else {"point": list(contact.point), "normal": list(contact.normal)},
+    }
+
+
+class _Fleet(FastHttpUser):
+    abstract = True
+    wait_time = between(0.0, 0.05)
+    default_headers = None if KEEPALIVE else {"Connection": "close"}
+
+    def on_start(self) -> None:
+        self.rng = np.random.default_rng(abs(hash(id(self))) % 2**32)
+
+    def _create(self) -> str | None:
+        created = self.client.post(
+            "/v1/sessions",
+            json={
+                "objects": OBJECTS,
+                "sensor": {
+                    "position_error": BOUNDS.position_error,
+                    "normal_error": BOUNDS.normal_error,
+                },
+                "workspace": {"center": list(WORKSPACE.center), "radius": WORKSPACE.radius},
+                "sensor_position": [WORKSPACE.radius, 0.0],
+                "strategy": STRATEGY,
+            },
+            name="POST /v1/sessions",
+        )
+        return created.json()["id"] if created.status_code == 201 else None
+
+    def _observe(self, sid: str, obs: Observation) -> str | None:
+        state = self.client.post(
+            f"/v1/sessions/{sid}/observations{OBSERVE_QUERY}",
+            json=_body(obs),
+            name="POST /v1/sessions/{id}/observations",
+        )
+        return state.json()["status"] if state.status_code == 201 else None
+
+    def _delete(self, sid: str) -> None:
+        self.client.delete(f"/v1/sessions/{sid}", name="DELETE /v1/sessions/{id}")
+
+
+class Robot(_Fleet):
+    """Plan, touch, observe: the closed loop of a robot using the planner."""
+
+    @task
+    def recognize(self) -> None:
+        world = random_world(MODELS, WORKSPACE, self.rng)
+        sid = self._create()
+        if sid is None:
+            return
+        for _ in range(MAX_TOUCHES):
+            plan = self.client.get(
+                f"/v1/sessions/{sid}/plan?limit=1", name="GET /v1/sessions/{id}/plan"
+            )
+            paths = plan.json().get("paths", []) if plan.status_code == 200 else []
+            if not paths:
+                break
+            best = paths[0]
+            path = SensingPath(tuple(best["origin"]), tuple(best["direction"]), best["length"])
+            obs, _ = world.execute(path, BOUNDS, self.rng)
+            if self._observe(sid, obs) in (None, *DONE):
+                break
+        self._delete(sid)
+
+
+class Prober(_Fleet):
+    """Observations only: random paths aimed at the object, no plan asked."""
+
+    @task
+    def probe(self) -> None:
+        world: World = random_world(MODELS, WORKSPACE, self.rng)
+        sid = self._create()
+        if sid is None:
+            return
+        for _ in range(MAX_TOUCHES):
+            obs, _ = world.execute(world.hitting_path(self.rng), BOUNDS, self.rng)
+            if self._observe(sid, obs) in (None, *DONE):
+                break
+        self._delete(sid)

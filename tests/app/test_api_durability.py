@@ -1,0 +1,102 @@
+"""A real `tactile serve` process: acknowledged observations survive SIGKILL.
+
+The server runs on 127.0.0.1 with a port it picks itself. A client posts
+observations (one contact, then misses) and records each acknowledged one;
+the server is killed with SIGKILL while the client is still posting; a new
+server on the same database file must hold every acknowledged observation, in
+order (plus at most the one that was in flight).
+"""
+
+from __future__ import annotations
+
+import json
+import socket
+import threading
+
+import httpx
+
+from app.serve import bind_socket
+from tests.app.api_support import BOTTOM, SQUARE, WORKSPACE, Server, miss
+
+
+def _signature(obs: dict) -> tuple:
+    return (tuple(round(v, 6) for v in obs["path"]["origin"]), obs["contact"] is not None)
+
+
+def test_acknowledged_observations_survive_sigkill(tmp_path):
+    db = tmp_path / "durable.db"
+    acked: list[tuple] = []
+    stop = threading.Event()
+    with Server(db) as server:
+        base = server.url
+        with httpx.Client(base_url=base, timeout=30) as http:
+            body = {"objects": [SQUARE], "workspace": WORKSPACE, "strategy": {"name": "pdm"}}
+            sid = http.post("/v1/sessions", json=body).json()["id"]
+            first = http.post(f"/v1/sessions/{sid}/observations", json=BOTTOM)
+            assert first.status_code == 201
+            acked.append(_signature(BOTTOM))
+
+            def post_until_killed() -> None:
+                k = 0
+                while not stop.is_set():
+                    obs = miss(k)
+                    try:
+                        r = http.post(f"/v1/sessions/{sid}/observations", json=obs)
+                    except httpx.TransportError:
+                        return  # the server died under us: this one is not acknowledged
+                    if r.status_code == 201:
+                        acked.append(_signature(obs))
+                    k += 1
+
+            writer = threading.Thread(target=post_until_killed)
+            writer.start()
+            while len(acked) < 25 and writer.is_alive():
+                writer.join(0.01)
+            server.kill()  # SIGKILL: no shutdown, no flush
+            stop.set()
+            writer.join(30)
+
+    assert len(acked) >= 25
+    with Server(db) as again, httpx.Client(base_url=again.url, timeout=30) as http:
+        state = http.get(f"/v1/sessions/{sid}").json()
+        stored = [_signature(o) for o in state["observations"]]
+        assert stored[: len(acked)] == acked
+        assert len(stored) - len(acked) in (0, 1)  # at most the one in flight
+        assert state["version"] == len(stored) + 1
+        assert state["status"] == "ambiguous"
+        # the restarted service still takes observations on the recovered session
+        r = http.post(f"/v1/sessions/{sid}/observations", json=miss(10_000))
+        assert r.status_code == 201
+        rid = r.headers["x-request-id"]
+    # JSON log lines; the request's lines carry its id
+    logged = [json.loads(line) for line in again.lines if line.startswith("{")]
+    assert len(logged) == len(again.lines)
+    access = [e for e in logged if e.get("event") == "request"]
+    assert access and all(e.get("request_id") for e in access)
+    assert any(e["request_id"] == rid and e["status"] == 201 for e in access)
+
+
+def test_serve_with_two_workers_shares_the_database(tmp_path):
+    db = tmp_path / "workers.db"
+    with Server(db, "--workers", "2") as server, httpx.Client(base_url=server.url) as http:
+        sid = http.post("/v1/sessions", json={"objects": [SQUARE]}).json()["id"]
+        for k in range(6):  # new connections spread over both workers
+            with httpx.Client(base_url=server.url) as fresh:
+                r = fresh.post(f"/v1/sessions/{sid}/observations", json=miss(k))
+                assert r.status_code == 201
+        assert len(http.get(f"/v1/sessions/{sid}").json()["observations"]) == 6
+        metrics = http.get("/metrics").text
+        assert "http_requests_total" in metrics
+
+
+def test_bound_socket_gives_accepted_connections_tcp_nodelay():
+    """uvicorn #3149: the socket `tactile serve` binds carries TCP_NODELAY to its connections."""
+    listener = bind_socket("127.0.0.1", 0)
+    try:
+        assert listener.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
+        with socket.create_connection(listener.getsockname()[:2]):
+            conn, _ = listener.accept()
+            with conn:
+                assert conn.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
+    finally:
+        listener.close()

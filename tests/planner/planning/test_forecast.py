@@ -1,0 +1,71 @@
+"""The recognition's forecast of a touch (planner.planning.forecast)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planner.planning.config import StrategyConfig
+from planner.planning.forecast import forecast_distinguishing, with_forecast
+from planner.planning.plan import plan_session
+from planner.recognition.session import Session
+from planner.types import SensingPath, SensorBounds
+from tests.conftest import WORKSPACE, analysed, object_set, touched_session
+
+BOUNDS = [SensorBounds(0.0, 0.0), SensorBounds(1.0, math.radians(3))]
+SENSOR = (WORKSPACE.radius, 0.0)
+
+
+def touched(name: str, bounds: SensorBounds, seed: int, touches: int) -> Session:
+    return touched_session(name, bounds, seed, touches)[1]
+
+
+@pytest.mark.parametrize("name", ["thesis_like", "symmetric"])
+@pytest.mark.parametrize("bounds", BOUNDS, ids=["exact", "1mm-3deg"])
+@settings(max_examples=6, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), touches=st.integers(2, 3))
+def test_a_path_sure_to_distinguish_is_forecast_so(name, bounds, seed, touches):
+    # where the outcome model tells every class apart for sure, so does the recognition
+    session = touched(name, bounds, seed, touches)
+    classes = {h.equivalence_class for h in session.hypotheses}
+    if session.status != "ambiguous" or len(classes) > 24:
+        return
+    found = analysed(session)
+    c = found.candidates
+    before = session.hypotheses
+    for i in np.argsort(-found.info.p_distinguishing, kind="stable")[:3]:
+        path = SensingPath(tuple(c.origins[i]), tuple(c.directions[i]), float(c.lengths[i]))
+        value = forecast_distinguishing(session, path)
+        assert 0.0 <= value <= 1.0
+        if found.info.p_distinguishing[i] >= 1 - 1e-9:
+            assert value == pytest.approx(1.0)
+    assert session.hypotheses == before  # the session itself is untouched
+
+
+def test_plan_session_forecasts_the_first_paths_within_the_budget():
+    session = touched("thesis_like", BOUNDS[1], 3, 2)
+    assert session.status == "ambiguous"
+    two = plan_session(session, SENSOR, StrategyConfig(budget_ms=None, forecast=2), 0)
+    assert len(two.paths) > 2
+    assert all(p.p_forecast is not None for p in two.paths[:2])
+    assert all(p.p_forecast is None for p in two.paths[2:])
+    assert two.as_dict()["paths"][0]["p_forecast"] == two.paths[0].p_forecast
+    none = plan_session(session, SENSOR, StrategyConfig(budget_ms=None, forecast=0), 0)
+    assert all(p.p_forecast is None for p in none.paths)
+    assert [p.path for p in none.paths] == [p.path for p in two.paths]
+    # no time left after the plan: nothing is forecast, nothing else changes
+    late = dataclasses.replace(none, elapsed_ms=1e6)
+    assert with_forecast(late, session, 2, budget_ms=10.0).paths == late.paths
+
+
+def test_forecast_of_nothing():
+    session = Session(object_set("thesis_like"), BOUNDS[0], WORKSPACE)
+    path = SensingPath((WORKSPACE.radius, 0.0), (-1.0, 0.0), 2 * WORKSPACE.radius)
+    assert forecast_distinguishing(session, path) is None
+    with pytest.raises(Exception, match="forecast"):
+        StrategyConfig(forecast=-1)

@@ -1,0 +1,187 @@
+"""Pose refinement when nothing is informative, repeated paths, and the search
+for the object before the first contact."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from hardware_sim.world import random_world
+from planner.planning.analysis import analyse
+from planner.planning.candidates import Candidates
+from planner.planning.config import STRATEGIES, StrategyConfig
+from planner.planning.plan import plan
+from planner.planning.probes import search_chord
+from planner.planning.refinement import refinement
+from planner.planning.result import REFINING, opening_path
+from planner.planning.survivors import repeated_paths
+from planner.recognition.session import Session
+from planner.types import Contact, Observation, SensingPath, SensorBounds
+from tests.conftest import WORKSPACE, object_set
+
+BUMP = object_set("thesis_like")
+SENSOR = SensorBounds(1.0, math.radians(5))
+
+
+def _stuck_session() -> Session:
+    """bump_block at the origin, touched on its bottom, right and top faces, the
+    bottom and top contacts only 10 mm apart: the rotation is known to about the
+    normal error, the disks (~23 mm) swamp the 15 mm bump, no path tells the four
+    classes apart."""
+    s = Session(BUMP, SENSOR, WORKSPACE)
+    for origin, direction, point, normal in [
+        ((20, -200), (0, 1), (20, 0), (0, -1)),
+        ((200, 70), (-1, 0), (100, 70), (1, 0)),
+        ((10, 200), (0, -1), (10, 80), (0, 1)),
+    ]:
+        s = s.observe(Observation(SensingPath(origin, direction, 400), Contact(point, normal)))
+    return s
+
+
+@pytest.fixture(scope="module")
+def stuck() -> Session:
+    return _stuck_session()
+
+
+def test_the_scene_has_no_informative_path(stuck):
+    found = analyse(
+        stuck.hypotheses, BUMP, SENSOR, WORKSPACE, (200.0, 0.0), observations=stuck.observations
+    )
+    assert found.table.n_classes > 1
+    assert not found.info.informative.any()
+
+
+@pytest.mark.parametrize("name", STRATEGIES)
+def test_plan_refines_the_pose_when_nothing_is_informative(stuck, name):
+    before = max(h.error_bound.eps_t for h in stuck.hypotheses)
+    result = plan(
+        stuck.hypotheses,
+        BUMP,
+        SENSOR,
+        WORKSPACE,
+        (200.0, 0.0),
+        StrategyConfig(name=name),
+        0,
+        observations=stuck.observations,
+    )
+    assert result.status == "ambiguous" and result.paths
+    assert "refining the pose" in (result.note or "")
+    best = result.paths[0]
+    assert best.family == REFINING
+    assert best.expected_eps_t is not None and best.expected_eps_t < 0.6 * before
+    assert result.as_dict()["paths"][0]["expected_eps_t"] == pytest.approx(best.expected_eps_t)
+
+
+def test_the_refining_touch_shrinks_the_disk_as_predicted(stuck):
+    # execute the best refining path on the true object (the first class' pose) exactly
+    result = plan(
+        stuck.hypotheses, BUMP, SENSOR, WORKSPACE, (200.0, 0.0), observations=stuck.observations
+    )
+    best = result.paths[0]
+    truth = shapely.Polygon(BUMP[0].stable_poses[0].outline)
+    end = np.add(best.origin, np.multiply(best.length, best.direction))
+    hit = shapely.intersection(truth.exterior, shapely.LineString([best.origin, end]))
+    points = np.array(shapely.get_coordinates(hit))
+    first = points[np.argmin((points - best.origin) @ np.asarray(best.direction))]
+    faces = BUMP[0].stable_poses[0].faces
+    on = np.argmin(
+        [
+            shapely.LineString([a, b]).distance(shapely.Point(first))
+            for a, b in zip(faces.start, faces.end, strict=True)
+        ]
+    )
+    after = stuck.observe(Observation(best.path, Contact(tuple(first), tuple(faces.normal[on]))))
+    mine = [h for h in after.hypotheses if h.object == "bump_block"]
+    assert min(h.error_bound.eps_t for h in mine) < 0.6 * min(
+        h.error_bound.eps_t for h in stuck.hypotheses
+    )
+
+
+def test_refinement_credits_nothing_to_a_path_that_misses(stuck):
+    away = Candidates.from_paths([SensingPath((-200.0, -190.0), (1.0, 0.0), 400.0)])
+    found = analyse(
+        stuck.hypotheses,
+        BUMP,
+        SENSOR,
+        WORKSPACE,
+        (200.0, 0.0),
+        observations=stuck.observations,
+        extra_paths=[SensingPath(away.origins[0], away.directions[0], 400.0)],
+    )
+    i = int(np.flatnonzero(found.candidates.source == "extra")[0])
+    assert not found.outcomes.hit[i].any()
+    ref = refinement(
+        stuck.hypotheses,
+        {m.name: m for m in BUMP},
+        found.posed,
+        found.outcomes,
+        stuck.contacts,
+        SENSOR,
+    )
+    np.testing.assert_array_equal(ref.after[i], ref.before)
+    assert ref.expected[i] == pytest.approx(ref.current)
+    assert ref.expected.min() < ref.current
+
+
+def test_repeated_paths_are_recognized(stuck):
+    taken = stuck.observations[1].path
+    o, d = np.asarray(taken.origin), np.asarray(taken.direction)
+    turn = math.radians(20)
+    rot = np.array([[math.cos(turn), -math.sin(turn)], [math.sin(turn), math.cos(turn)]])
+    cands = Candidates.from_paths(
+        [
+            taken,  # the same path
+            SensingPath((o[0], o[1] + 3), taken.direction, taken.length),  # 3 mm aside
+            SensingPath((o[0], o[1] + 60), taken.direction, taken.length),  # far aside
+            SensingPath(taken.origin, tuple(rot @ d), taken.length),  # another way
+            SensingPath(tuple(o + 400 * d), tuple(-d), taken.length),  # the other way
+        ]
+    )
+    found = analyse(
+        stuck.hypotheses, BUMP, SENSOR, WORKSPACE, (200.0, 0.0), observations=stuck.observations
+    )
+    flags = repeated_paths(cands, stuck.observations, found.posed, SENSOR)
+    assert flags.tolist() == [True, True, False, False, False]
+
+
+def _hit_share(path: SensingPath, worlds) -> float:
+    return float(np.mean([w.polygon().intersects(_line(path)) for w in worlds]))
+
+
+def _line(path: SensingPath) -> shapely.LineString:
+    return shapely.LineString(
+        [path.origin, np.add(path.origin, np.multiply(path.length, path.direction))]
+    )
+
+
+@pytest.mark.parametrize("name", ["thesis_like", "workshop", "table_poses"])
+def test_search_after_misses_meets_the_object_more_often(name):
+    # independent worlds that the first probe (through the centre) missed: the
+    # search chord meets more of them than turning about the centre would
+    models = object_set(name)
+    by_name = {m.name: m for m in models}
+    rng = np.random.default_rng(11)
+    first = opening_path(WORKSPACE, (200.0, 0.0))
+    worlds = [random_world(models, WORKSPACE, rng) for _ in range(800)]
+    left = [w for w in worlds if not w.polygon().intersects(_line(first))]
+    assert len(left) > 200
+    chord, _ = search_chord(by_name, WORKSPACE, [first], (200.0, 0.0))
+    turned = opening_path(WORKSPACE, (200.0, 0.0), misses=1)
+    assert _hit_share(chord, left) > _hit_share(turned, left) + 0.05
+    # and after the search chord missed too
+    left2 = [w for w in left if not w.polygon().intersects(_line(chord))]
+    third, _ = search_chord(by_name, WORKSPACE, [first, chord], (200.0, 0.0))
+    turned2 = opening_path(WORKSPACE, (200.0, 0.0), misses=2)
+    assert _hit_share(third, left2) > _hit_share(turned2, left2) + 0.05
+
+
+def test_opening_search_falls_back_when_the_prior_is_exhausted():
+    # misses along every chord of a fine fan: no prior draw is left
+    fan = [opening_path(WORKSPACE, (200.0, 0.0), angle=a) for a in np.linspace(0, math.pi, 90)]
+    fan += [SensingPath((x, -200.0), (0.0, 1.0), 400.0) for x in np.linspace(-190, 190, 40)]
+    chord, aim = search_chord({m.name: m for m in BUMP}, WORKSPACE, fan, (200.0, 0.0))
+    assert aim == (0.0, 0.0)
+    assert math.hypot(*chord.origin) == pytest.approx(WORKSPACE.radius)

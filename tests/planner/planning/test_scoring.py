@@ -1,0 +1,428 @@
+"""Scores, families, expected remaining touches and the exact DP (DESIGN §4.12).
+
+Synthetic outcome matrices are (paths, classes, classes) booleans: entry
+[c, k, j] says class j survives path c when the truth is class k.
+"""
+
+from __future__ import annotations
+
+import itertools
+import math
+
+import numpy as np
+import pytest
+import shapely
+from hypothesis import assume, given, settings
+from hypothesis import strategies as st
+
+from planner.models.outlines import make_stable_pose
+from planner.planning.bitsets import SurvivorTable, undominated
+from planner.planning.budget import Deadline
+from planner.planning.confusability import confusability, survivor_table
+from planner.planning.outcomes import predict_outcomes
+from planner.planning.posed_set import pose_hypotheses
+from planner.planning.scoring import (
+    FAMILIES,
+    combined_objective,
+    family_codes,
+    information_scores,
+    motion_cost,
+)
+from planner.planning.search import expected_remaining, state_value
+from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose, SensorBounds, Workspace
+
+
+def partition(k: int, *groups: tuple[int, ...]) -> np.ndarray:
+    """Confusability of one path whose outcomes split the classes into `groups`
+    (classes not named are told apart from everything)."""
+    m = np.eye(k, dtype=bool)
+    for g in groups:
+        m[np.ix_(g, g)] = True
+    return m
+
+
+def only_separates(k: int, *pairs: tuple[int, int]) -> np.ndarray:
+    """A path on which every pair of classes is confusable except the given ones."""
+    m = np.ones((k, k), dtype=bool)
+    for a, b in pairs:
+        m[a, b] = m[b, a] = False
+    return m
+
+
+UNIFORM6 = np.full(6, 1 / 6)
+# Fig. 7.1: a distinguishes 0, 1, 2 and leaves {3, 4, 5}; b leaves a pair whatever happens
+PATH_A = partition(6, (3, 4, 5))
+PATH_B = partition(6, (0, 1), (2, 3), (4, 5))
+
+
+def fig71(case: str) -> SurvivorTable:
+    """Paths a, b and a follow-up that is useless as a first touch (0, 1, 2 confusable
+    with everything on it): case `one` splits {3, 4, 5} at once, case `two` only 4 from 5."""
+    if case == "one":
+        follow = only_separates(6, (3, 4), (3, 5), (4, 5))
+    else:
+        follow = only_separates(6, (4, 5))
+    return SurvivorTable.from_matrix(np.stack([PATH_A, PATH_B, follow]), UNIFORM6)
+
+
+def test_fig71_information_scores():
+    s = information_scores(fig71("one"))
+    np.testing.assert_allclose(s.p_distinguishing[:2], [0.5, 0.0])
+    np.testing.assert_allclose(s.p_informative[:2], [1.0, 1.0])
+    # a: 3/6 (1 - 1/6) + 3/6 (1 - 3/6); b: 1 - 2/6
+    np.testing.assert_allclose(s.expected_pruning[:2], [2 / 3, 2 / 3])
+    assert [FAMILIES[f] for f in s.family] == ["informative", "informative", "partial"]
+
+
+@pytest.mark.parametrize(
+    ("case", "e_three", "e_a"),
+    [
+        # the 3 left after a are resolved in one touch: E_a = 1 + 0.5 * 1
+        ("one", 1.0, 1.5),
+        # they are not: b splits 3 | {4, 5}, then the follow-up: E(3) = 1 + 2/3 * 1
+        ("two", 5 / 3, 1 + 0.5 * 5 / 3),
+    ],
+)
+def test_fig71_expected_remaining(case, e_three, e_a):
+    table = fig71(case)
+    three = np.array([False, False, False, True, True, True])
+    assert state_value(table, None, state=three) == pytest.approx(e_three)
+    # E_b = 1 + (E{0,1} + E{2,3} + E{4,5}) / 3 = 1 + 1
+    for depth in (2, 3, None):
+        result = expected_remaining(table, depth, paths=np.array([0, 1]))
+        assert result.value[0] == pytest.approx(e_a)
+        assert result.value[1] == pytest.approx(2.0)
+        assert result.exact[[0, 1]].all()
+    # either way the lower expected count is a's: lookahead agrees with P(DM) here
+    assert state_value(table, None) == pytest.approx(min(e_a, 2.0))
+
+
+def test_fig71_b_wins_when_the_leftovers_are_costly():
+    # the thesis' dilemma in four classes: a distinguishes 0 (P(DM) = 1/4) but leaves
+    # {1, 2, 3}, which take 5/3 more touches; b surely leaves a pair, each split in one
+    a = partition(4, (1, 2, 3))
+    b = partition(4, (0, 1), (2, 3))
+    follow = only_separates(4, (2, 3))
+    table = SurvivorTable.from_matrix(np.stack([a, b, follow]), np.full(4, 0.25))
+    info = information_scores(table)
+    assert info.p_distinguishing[0] > info.p_distinguishing[1]
+    result = expected_remaining(table, 2)
+    # E_a = 1 + 3/4 * (1 + 2/3); E_b = 1 + 1/2 + 1/2
+    np.testing.assert_allclose(result.value[:2], [2.25, 2.0])
+    assert int(np.argmin(result.value)) == 1
+
+
+def random_tables(max_classes=4, max_paths=3):
+    @st.composite
+    def build(draw):
+        k = draw(st.integers(2, max_classes))
+        c = draw(st.integers(1, max_paths if k <= 3 else 2))
+        upper = draw(st.lists(st.booleans(), min_size=c * k * k, max_size=c * k * k))
+        conf = np.array(upper, dtype=bool).reshape(c, k, k)
+        conf = conf | conf.transpose(0, 2, 1)  # confusability is symmetric
+        weight = np.array(draw(st.lists(st.floats(0.05, 1.0), min_size=k, max_size=k)))
+        return SurvivorTable.from_matrix(conf, weight)
+
+    return build()
+
+
+def brute_force(table: SurvivorTable, first: int | None = None) -> float:
+    """min over every deterministic policy (state -> path) of its expected touches,
+    evaluated by plain recursion; a stay outcome counts as another try."""
+    conf, w = table.matrix(), table.weight
+    n_paths, k = conf.shape[0], conf.shape[1]
+
+    def child(s, c, h):
+        return frozenset(j for j in s if conf[c, h, j])
+
+    def informative(s, c):
+        return any(child(s, c, h) != s for h in s)
+
+    full = frozenset(range(k))
+    reach, todo = set(), [full]
+    while todo:
+        s = todo.pop()
+        if s in reach:
+            continue
+        reach.add(s)
+        for c in range(n_paths):
+            if informative(s, c):
+                todo.extend(child(s, c, h) for h in s)
+    decisions = sorted(
+        (s for s in reach if any(informative(s, c) for c in range(n_paths))), key=sorted
+    )
+    options = [
+        [c for c in range(n_paths) if informative(s, c) and (s != full or first in (None, c))]
+        for s in decisions
+    ]
+    best = math.inf
+    for choice in itertools.product(*options):
+        policy = dict(zip(decisions, choice, strict=True))
+
+        def value(s, policy=policy):
+            if s not in policy:
+                return 0.0  # no path splits s: nothing more to learn
+            c, total = policy[s], sum(w[h] for h in s)
+            stay = sum(w[h] for h in s if child(s, c, h) == s) / total
+            rest = sum(w[h] / total * value(child(s, c, h)) for h in s if child(s, c, h) != s)
+            return (1 + rest) / (1 - stay)
+
+        best = min(best, value(full))
+    return best
+
+
+@settings(max_examples=60, deadline=None)
+@given(random_tables())
+def test_optimal_equals_brute_force(table):
+    assume(table.n_classes <= 3 or table.n_paths <= 2)
+    exact = expected_remaining(table, None)
+    root = state_value(table, None)
+    assert root == pytest.approx(brute_force(table))
+    for c in range(table.n_paths):
+        expected = brute_force(table, first=c)
+        if math.isinf(expected):
+            assert math.isinf(exact.value[c])
+        else:
+            assert exact.value[c] == pytest.approx(expected)
+    finite = exact.value[np.isfinite(exact.value)]
+    assert root == pytest.approx(finite.min() if len(finite) else 0.0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(random_tables(max_classes=6, max_paths=5))
+def test_deep_lookahead_equals_optimal_and_shallow_bounds_it(table):
+    exact = expected_remaining(table, None).value
+    deep = expected_remaining(table, table.n_classes).value
+    np.testing.assert_allclose(deep, exact)
+    previous = np.zeros_like(exact)
+    for depth in range(1, table.n_classes):
+        bound = expected_remaining(table, depth).value
+        assert np.all(bound <= exact + 1e-9)  # the leaf bound is admissible
+        assert np.all(bound >= previous - 1e-9)  # and deeper search only tightens it
+        previous = bound
+
+
+@settings(max_examples=40, deadline=None)
+@given(random_tables(max_classes=6, max_paths=6), st.integers(1, 3))
+def test_top_k_search_keeps_the_best_exact(table, top_k):
+    full = expected_remaining(table, 2)
+    pruned = expected_remaining(table, 2, top_k=top_k)
+    order = np.lexsort((~pruned.exact, pruned.value))[:top_k]
+    best = np.sort(full.value)[:top_k]
+    np.testing.assert_allclose(np.sort(pruned.value[order]), best)
+    assert np.all(pruned.value <= full.value + 1e-9)  # the rest keep lower bounds
+
+
+def test_inseparable_classes_end_the_search():
+    # classes 1 and 2 are confusable on every path: once they are what is left,
+    # no touch can help, and the remaining count is 0, not infinity
+    a = partition(3, (1, 2))
+    table = SurvivorTable.from_matrix(np.stack([a, a]), np.ones(3) / 3)
+    assert state_value(table, None) == pytest.approx(1.0)
+    assert state_value(table, None, state=np.array([False, True, True])) == 0.0
+
+
+@pytest.mark.parametrize("depth", [None, 2])
+def test_deadline_stops_the_search(depth):
+    rng = np.random.default_rng(0)
+    conf = rng.random((30, 12, 12)) < 0.4
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(12))
+    result = expected_remaining(table, depth, deadline=Deadline(end=0.0))
+    assert result.truncated
+    assert not result.exact[np.isfinite(result.value)].any()
+    with pytest.raises(TimeoutError):
+        state_value(table, None, deadline=Deadline(end=0.0))
+
+
+@pytest.mark.parametrize(
+    ("p_dm", "p_inf", "family"),
+    [
+        (1.0, 1.0, "distinguishing"),
+        (0.4, 1.0, "informative"),
+        (0.0, 0.3, "partial"),
+        (0.0, 0.0, "uninformative"),
+    ],
+)
+def test_families(p_dm, p_inf, family):
+    assert FAMILIES[int(family_codes(np.array([p_dm]), np.array([p_inf]))[0])] == family
+
+
+def test_motion_cost_is_arc_plus_approach():
+    ws = Workspace((10.0, 0.0), 50.0)
+    origins = np.array([[60.0, 0.0], [10.0, 50.0], [-40.0, 0.0]])
+    cost = motion_cost(origins, np.array([5.0, 5.0, 5.0]), ws, (80.0, 0.0))
+    np.testing.assert_allclose(cost, [5.0, 50 * math.pi / 2 + 5, 50 * math.pi + 5])
+    np.testing.assert_allclose(combined_objective([1.0, 2.0], [10.0, 0.0], 0.5), [6.0, 2.0])
+
+
+SQUARE = ObjectModel("square", (make_stable_pose([[-20, -20], [20, -20], [20, 20], [-20, 20]]),))
+FRAME = ObjectModel(
+    "frame",
+    (
+        make_stable_pose(
+            [[-20, -20], [20, -20], [20, 20], [-20, 20]],
+            [[[-10, -10], [-10, 10], [10, 10], [10, -10]]],
+        ),
+    ),
+)
+MODELS = {"square": SQUARE, "frame": FRAME}
+DOWN = (np.array([[0.0, 100.0]]), np.array([[0.0, -1.0]]), np.array([130.0]))
+
+
+def scores_down(hyps):
+    sensor = SensorBounds(0.2, 0.02)
+    posed = pose_hypotheses(hyps, MODELS)
+    out = predict_outcomes(posed, *DOWN, sensor)
+    table = survivor_table(posed, confusability(posed, out, sensor))
+    return posed, out, information_scores(table)
+
+
+def square(x, y, cls, name="square", eps_t=0.5):
+    return Hypothesis(name, 0, (), Pose(x, y, 0.0), ErrorBound(0.0, 0.0, eps_t), 1.0, cls)
+
+
+def test_theorem2_single_blocking_boundary():
+    # n = 5 equally likely; the path crosses one blocking boundary of degree m = 2
+    # (three top faces on y = 20, at x offsets that do not matter on this path)
+    hyps = [square(0, 0, 0), square(3, 0, 1), square(-3, 0, 2), square(0, 5, 3), square(0, 10, 4)]
+    _, out, info = scores_down(hyps)
+    assert not out.uncertain.any()
+    n, m = 5, 2
+    assert info.p_distinguishing[0] == pytest.approx((n - m - 1) / n)
+
+
+def test_theorem2_agrees_with_the_blocking_strength_of_the_vector_mii():
+    # exact outlines: the MII's blocking boundaries are segments; the path runs from
+    # outside the union into the IA and crosses the one shared top face
+    from planner.image.vector import build_mii, paths_crossings
+
+    offsets = [(0, 0), (3, 0), (-3, 0), (0, 5), (0, 10)]
+    hyps = [square(x, y, i, eps_t=0.0) for i, (x, y) in enumerate(offsets)]
+    into_ia = (DOWN[0], DOWN[1], np.array([100.0]))  # ends at (0, 0), inside every outline
+    mii = build_mii(hyps, MODELS)
+    assert mii.intersection.contains(shapely.Point(0.0, 0.0))
+    crossed = paths_crossings(mii, *into_ia)
+    assert crossed.count[0] == 1
+    sensor = SensorBounds(0.2, 0.02)
+    posed = pose_hypotheses(hyps, MODELS)
+    out = predict_outcomes(posed, *into_ia, sensor)
+    info = information_scores(survivor_table(posed, confusability(posed, out, sensor)))
+    assert info.p_distinguishing[0] == pytest.approx(1.0 - crossed.total[0])
+
+
+def test_fig72_blocking_boundary_crossed_yet_distinguishing():
+    # thesis Fig. 7.2 asks whether a path can cross a blocking boundary and still be
+    # sure to distinguish: yes. The frame's hole face on y = -10 (normal +y) and the
+    # low square's top face share a blocking boundary the path crosses, but the
+    # frame is touched first on its own top face.
+    hyps = [
+        square(0, 0, 0, name="frame"),
+        square(0, -30, 1),
+        square(0, 8, 2),
+        square(0, -5, 3),
+    ]
+    posed, out, info = scores_down(hyps)
+    hole_face = [
+        f
+        for f in range(posed.valid.shape[1])
+        if posed.valid[0, f]
+        and np.allclose(posed.start[0, f, 1], -10)
+        and posed.normal[0, f, 1] > 0.99
+    ]
+    assert hole_face, "the frame has a hole face on y = -10 facing up"
+    assert np.allclose(out.point[0, 1], [0, -10]) and np.allclose(out.normal[0, 1], [0, 1])
+    assert np.allclose(out.point[0, 0], [0, 20])
+    assert info.p_distinguishing[0] == pytest.approx(1.0)
+    assert FAMILIES[int(info.family[0])] == "distinguishing"
+
+
+def dense_scores(conf: np.ndarray, weight: np.ndarray, state: np.ndarray) -> tuple:
+    """P(DM), P(informative) and expected pruning from the (C, K, K) class matrix."""
+    conf = conf[:, state][:, :, state]
+    w = weight[state] / weight[state].sum()
+    surviving = conf.astype(float) @ w
+    p_dm = (conf.sum(axis=-1) == 1).astype(float) @ w
+    p_inf = (~conf.all(axis=-1)).astype(float) @ w
+    return p_dm, p_inf, (1.0 - surviving) @ w
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 140), st.integers(1, 6), st.integers(0, 2**31))
+def test_information_scores_agree_with_the_class_matrix(k, n_paths, seed):
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.05, 0.9)
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    for state in (None, rng.random(k) < 0.6):
+        if state is not None and not state.any():
+            continue
+        s = information_scores(table, state)
+        inside = np.ones(k, bool) if state is None else state
+        p_dm, p_inf, pruning = dense_scores(table.matrix(), table.weight, inside)
+        np.testing.assert_allclose(s.p_distinguishing, p_dm, atol=1e-12)
+        np.testing.assert_allclose(s.p_informative, p_inf, atol=1e-12)
+        np.testing.assert_allclose(s.expected_pruning, np.clip(pruning, 0, 1), atol=1e-12)
+
+
+def lookahead_reference(table: SurvivorTable, depth: int) -> np.ndarray:
+    """E_P(S) of every path, `depth` touches deep, by plain recursion over sets."""
+    conf, weight = table.matrix(), table.weight
+    together = conf.all(axis=0)
+
+    def settled(s):
+        return all(together[a, b] for a in s for b in s)
+
+    def path(s, c, d):
+        w = {h: weight[h] / sum(weight[j] for j in s) for h in s}
+        kids = {h: frozenset(j for j in s if conf[c, h, j]) for h in s}
+        stay = sum(w[h] for h in s if kids[h] == s)
+        if stay >= 1 - 1e-12:
+            return math.inf
+        rest = sum(w[h] * value(kids[h], d - 1) for h in s if kids[h] != s)
+        return (1 + rest) / (1 - stay)
+
+    def value(s, d):
+        if settled(s):
+            return 0.0
+        if d == 0:
+            return 1.0
+        return min(path(s, c, d) for c in range(len(conf)))
+
+    full = frozenset(range(table.n_classes))
+    return np.array([path(full, c, depth) if not settled(full) else 0.0 for c in range(len(conf))])
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 12), st.integers(1, 6), st.integers(0, 2**31))
+def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
+    # inseparable pairs make settled leaves; the one-touch leaves run in batches
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.7)
+    pairs = rng.integers(0, k, (rng.integers(0, 4), 2))
+    conf[:, pairs[:, 0], pairs[:, 1]] = True
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    for depth in (1, 2, 3):
+        found = expected_remaining(table, depth)
+        np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
+        assert found.exact.all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 10), st.integers(1, 4), st.integers(0, 2**31))
+def test_dominated_paths_leave_the_lookahead_unchanged(k, n_paths, seed):
+    # copies of paths, and copies that confuse more: the one-touch leaves use only
+    # the paths nothing dominates, the values stay those of the plain recursion
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.6)
+    conf = conf | conf.transpose(0, 2, 1)
+    worse = conf[rng.integers(0, n_paths, 3)] | (rng.random((3, k, k)) < 0.2)
+    same = conf[rng.integers(0, n_paths, 2)]
+    paths = np.concatenate([worse | worse.transpose(0, 2, 1), conf, same])
+    table = SurvivorTable.from_matrix(paths[rng.permutation(len(paths))], rng.uniform(0.1, 1, k))
+    kept = undominated(table.bits)
+    assert len(kept) <= n_paths
+    matrix = table.matrix()
+    for q in range(len(paths)):  # every path is within reach of a kept one
+        assert any((matrix[p] <= matrix[q]).all() for p in kept)
+    for depth in (1, 2, 3):
+        found = expected_remaining(table, depth)
+        np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)

@@ -1,0 +1,71 @@
+"""Constraint tables (DESIGN §4.2) against brute force, and the checks' soundness."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.geometry import wrap_angle
+from planner.models.outlines import make_stable_pose
+from planner.recognition.constraints import ConstraintTables, build_tables, pair_feasibility
+from planner.types import Contact, Faces
+from tests.conftest import SET_NAMES, object_set
+
+SAMPLES = 120
+
+
+def brute_force_tables(faces: Faces) -> ConstraintTables:
+    """Tables from dense sampling of face points."""
+    s = np.linspace(0.0, 1.0, SAMPLES)
+    pts = faces.start[:, None, :] + s[None, :, None] * (faces.end - faces.start)[:, None, :]
+    gaps = pts[None, :, None, :, :] - pts[:, None, :, None, :]  # [a, b, i, j] = y_bj - x_ai
+    dist = np.hypot(gaps[..., 0], gaps[..., 1])
+    proj = np.einsum("ak,abijk->abij", faces.normal, gaps)
+    return ConstraintTables(
+        d_min=dist.min(axis=(2, 3)),
+        d_max=dist.max(axis=(2, 3)),
+        angle=wrap_angle(faces.angle[None, :] - faces.angle[:, None]),
+        c_min=proj.min(axis=(2, 3)),
+        c_max=proj.max(axis=(2, 3)),
+        scale=1.0,
+    )
+
+
+@pytest.mark.parametrize("name", SET_NAMES)
+def test_tables_match_brute_force(name):
+    for model in object_set(name):
+        for pose in model.stable_poses:
+            exact, brute = build_tables(pose.faces), brute_force_tables(pose.faces)
+            # sampling error: half the largest sample spacing on each of two faces
+            step = pose.faces.length.max() / (SAMPLES - 1)
+            assert np.all(exact.d_min <= brute.d_min + 1e-9)
+            assert np.allclose(exact.d_min, brute.d_min, atol=step)
+            assert np.allclose(exact.d_max, brute.d_max, atol=1e-9)
+            assert np.allclose(exact.c_min, brute.c_min, atol=1e-9)
+            assert np.allclose(exact.c_max, brute.c_max, atol=1e-9)
+
+
+def test_signed_angle_rejects_the_mirror_assignment():
+    # a right triangle: contacts on the legs seen in the mirrored order must be refused
+    tri = make_stable_pose([[0, 0], [4, 0], [0, 3]])
+    t = build_tables(tri.faces)
+    bottom = Contact((2, 0), (0, -1))
+    left = Contact((0, 1), (-1, 0))
+    ok = pair_feasibility(t, bottom, left, 0.0, 0.0)
+    assert ok[0, 2] and not ok[2, 0]
+    # under an unsigned test the mirror (left face first) would pass the angle check
+    assert math.isclose(abs(t.angle[0, 2]), abs(t.angle[2, 0]))
+
+
+def test_error_widens_every_check():
+    sq = make_stable_pose([[0, 0], [10, 0], [10, 10], [0, 10]])
+    t = build_tables(sq.faces)
+    a = Contact((5, 0), (0, -1))
+    far = Contact((5, 11), (0, 1))  # 11 apart: too far for an exact square of side 10
+    assert not pair_feasibility(t, a, far, 0.0, 0.0).any()
+    assert pair_feasibility(t, a, far, 0.5, 0.0)[0, 2]
+    tilted = Contact((10, 5), (math.cos(0.05), math.sin(0.05)))
+    assert not pair_feasibility(t, a, tilted, 0.0, 0.0)[0, 1]
+    assert pair_feasibility(t, a, tilted, 0.0, 0.03)[0, 1]

@@ -1,0 +1,113 @@
+"""Pictures of the MII: SVG and PNG bytes, vector and grid views (planner/render.py)."""
+
+from __future__ import annotations
+
+import struct
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+from functools import cache
+from pathlib import Path
+
+import pytest
+
+from planner.errors import PlanningNotPossibleError
+from planner.image.grid import build_grid, thesis_paths
+from planner.image.vector import build_mii
+from planner.render import render_png, render_svg
+from planner.types import Contact, Observation, SensingPath, Workspace
+from tests.planner.image.test_vector import BUMP_CONTACTS, bump_block_case
+
+WORKSPACE = Workspace((50.0, 40.0), 150.0)
+SENSOR = (200.0, 40.0)
+CONTACTS = [Contact(p, n) for p, n in BUMP_CONTACTS]
+
+
+@cache
+def scene(eps_t: float = 0.0):
+    models, hs = bump_block_case(eps_t=eps_t, rotation=0.03 if eps_t else 0.0)
+    grid = build_grid(hs, models, size=70)
+    paths = thesis_paths(hs, models, WORKSPACE, SENSOR, grid=grid)[:3]
+    return build_mii(hs, models), grid, paths
+
+
+def ids(svg: bytes) -> set[str]:
+    root = ET.fromstring(svg)
+    return {el.get("id") for el in root.iter() if el.get("id")}
+
+
+def svg_text(svg: bytes) -> str:
+    return " ".join(t for t in ET.fromstring(svg).itertext())
+
+
+@pytest.mark.parametrize("eps_t", [0.0, 8.0])
+def test_svg_holds_the_image_with_blocking_and_ranked_paths(eps_t):
+    mii, grid, paths = scene(eps_t)
+    p_dm = [1.0 - p.strength for p in paths]
+    svg = render_svg(
+        mii, grid, contacts=CONTACTS, workspace=WORKSPACE, sensor_position=SENSOR,
+        paths=paths, p_distinguishing=p_dm, title="bump_block",
+    )  # fmt: skip
+    found = ids(svg)
+    blocking = {i for i in found if i.startswith("blocking-")}
+    assert blocking == {f"blocking-{k}" for k in range(len(mii.blocking))}
+    for rank in (1, 2, 3):
+        assert {f"path-{rank}", f"path-{rank}-label", f"grid-path-{rank}"} <= found
+    assert {f"outline-{i}" for i in range(len(mii.hypotheses))} <= found
+    assert {"ia-0", "safe-circle", "sensor", "contact-0", "contact-1", "grid-image"} <= found
+    assert "grid-target-0" in found
+    assert f"P(DM)={p_dm[0]:.2f}" in svg_text(svg)
+
+
+def test_labels_only_show_p_dm_when_given():
+    mii, _, paths = scene()
+    text = svg_text(render_svg(mii, paths=paths, workspace=WORKSPACE))
+    assert "P(DM)" not in text
+    plain = [SensingPath((0.0, 40.0), (1.0, 0.0), 60.0)]
+    text = svg_text(render_svg(mii, paths=plain, p_distinguishing=[0.25]))
+    assert "P(DM)=0.25" in text
+
+
+def test_single_views_and_observations_as_contacts():
+    mii, grid, paths = scene()
+    grid_only = ids(render_svg(grid=grid, paths=paths, workspace=WORKSPACE))
+    assert "grid-image" in grid_only and "path-1" in grid_only and "outline-0" not in grid_only
+    obs = [Observation(SensingPath((30.0, -100.0), (0.0, 1.0), 150.0), CONTACTS[0])]
+    vector_only = ids(render_svg(mii, contacts=obs))
+    assert "contact-0" in vector_only and "grid-image" not in vector_only
+
+
+def test_svg_is_deterministic():
+    mii, grid, paths = scene()
+    a = render_svg(mii, grid, paths=paths, workspace=WORKSPACE)
+    b = render_svg(mii, grid, paths=paths, workspace=WORKSPACE)
+    assert a == b
+
+
+@pytest.mark.parametrize(("views", "dpi"), [(2, 100), (1, 50)])
+def test_png_signature_and_size(views, dpi):
+    mii, grid, paths = scene()
+    png = render_png(
+        mii, grid if views == 2 else None, paths=paths, workspace=WORKSPACE, dpi=dpi,
+        panel_inches=4.0,
+    )  # fmt: skip
+    assert png[:8] == b"\x89PNG\r\n\x1a\n" and png[12:16] == b"IHDR"
+    width, height = struct.unpack(">II", png[16:24])
+    assert (width, height) == (round((4.0 * views + 0.8) * dpi), round(4.0 * dpi))
+
+
+def test_nothing_to_draw_is_an_error():
+    with pytest.raises(PlanningNotPossibleError):
+        render_svg()
+
+
+def test_matplotlib_is_lazy_and_pyplot_never_loaded():
+    code = (
+        "import sys, planner.render as r\n"
+        "assert 'matplotlib' not in sys.modules\n"
+        "from tests.planner.test_render import scene\n"
+        "r.render_png(scene()[0])\n"
+        "assert 'matplotlib.pyplot' not in sys.modules\n"
+    )
+    root = Path(__file__).resolve().parents[2]
+    subprocess.run([sys.executable, "-c", code], check=True, timeout=120, cwd=root)
