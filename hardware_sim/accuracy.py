@@ -19,6 +19,7 @@ import numpy as np
 
 from hardware_sim.presets import PRESETS, Preset, build_arm, resolve_preset
 from hardware_sim.world import random_world
+from planner.geometry import ANGLE_SLACK
 from planner.models.library import load_objects
 from planner.types import ObjectModel, Workspace
 
@@ -37,7 +38,7 @@ class TouchErrors:
     def within(self) -> tuple[float, float]:
         """Share of contacts inside the normal bound and inside the position bound."""
         b = self.preset.bounds
-        slack = 1e-9
+        slack = ANGLE_SLACK
         return (
             float(np.mean(self.normal <= b.normal_error + slack)),
             float(np.mean(self.position <= b.position_error + slack)),

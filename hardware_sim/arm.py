@@ -44,6 +44,7 @@ import numpy as np
 from hardware_sim.protocol import ProbeResult
 from hardware_sim.sensor import ForceSensor, Press
 from hardware_sim.world import World
+from planner.geometry import LENGTH_SLACK
 from planner.types import Contact, Observation, SensingPath
 
 if TYPE_CHECKING:
@@ -119,7 +120,7 @@ def slide_off_vertex(
             continue
         # the neighbour shares this vertex: its end (or start) is our start (or end)
         other = end if neighbour_end == "end" else start
-        near = np.flatnonzero(np.hypot(*(other - vertex).T) <= 1e-9 * max(1.0, zone))
+        near = np.flatnonzero(np.hypot(*(other - vertex).T) <= LENGTH_SLACK * max(1.0, zone))
         near = near[near != face]
         if not len(near):
             continue

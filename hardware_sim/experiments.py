@@ -19,12 +19,9 @@ cluster with ``dask=ADDRESS`` (``dask.distributed`` imported only then).
 
 from __future__ import annotations
 
-import argparse
-import json
 import math
 import os
 import signal
-import sys
 import threading
 from collections.abc import Callable, Iterable, Iterator, Sequence
 from contextlib import contextmanager
@@ -34,10 +31,9 @@ from typing import Any
 import numpy as np
 
 from hardware_sim.client import InProcessService, outline_distance, run_recognition
-from hardware_sim.presets import PRESETS, Preset, build_arm, explicit_preset, resolve_preset
+from hardware_sim.presets import PRESETS, Preset, build_arm
 from hardware_sim.world import PLACEMENTS, random_world
-from planner.errors import PlannerError
-from planner.planning.config import STRATEGIES, THESIS_CHOICES, StrategyConfig
+from planner.planning.config import STRATEGIES, StrategyConfig
 from planner.recognition.interpretation import RecognitionConfig
 from planner.types import ObjectModel, Workspace
 
@@ -275,5 +271,3 @@ def _dask_map(
         futures = [client.submit(run_batch, spec_future, b, pure=False) for b in batches]
         for future in as_completed(futures):
             yield future.result()
-
-

@@ -13,6 +13,9 @@ from collections.abc import Sequence
 import numpy as np
 
 __all__ = [
+    "ANGLE_SLACK",
+    "LENGTH_SLACK",
+    "SHARE_SLACK",
     "cast_rays",
     "point_segment_distance",
     "polygon_centroid",
@@ -22,6 +25,15 @@ __all__ = [
     "signed_area",
     "wrap_angle",
 ]
+
+
+#: Rounding slack of lengths, as a share of the scene's scale: a length this far
+#: past a bound (times the scale) still counts as within it.
+LENGTH_SLACK = 1e-9
+#: Rounding slack of angles (radians).
+ANGLE_SLACK = 1e-9
+#: Rounding slack of dimensionless quantities: shares, probabilities, determinants.
+SHARE_SLACK = 1e-9
 
 
 def wrap_angle(angle: np.ndarray | float) -> np.ndarray:

@@ -21,6 +21,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 import shapely
 
+from planner.geometry import LENGTH_SLACK
 from planner.image.grid import GridMII, ThesisPath
 from planner.image.vector import VectorMII
 from planner.types import Contact, Observation, SensingPath, Workspace
@@ -270,7 +271,7 @@ def _limits(
         (x0, y0), (x1, y1) = grid.mapping.inverse([[0.5, 0.5], [size + 0.5, size + 0.5]])
     else:
         return -1.0, 1.0, -1.0, 1.0
-    pad = 0.1 * max(x1 - x0, y1 - y0, 1e-9)
+    pad = 0.1 * max(x1 - x0, y1 - y0, LENGTH_SLACK)
     return x0 - pad, x1 + pad, y0 - pad, y1 + pad
 
 

@@ -11,11 +11,13 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass, field
+from typing import NamedTuple
 
 import numpy as np
 
 from planner import geometry
 from planner.errors import InvalidObservationError
+from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
 
 __all__ = [
@@ -23,6 +25,7 @@ __all__ = [
     "ErrorBound",
     "Faces",
     "Hypothesis",
+    "InterpretationId",
     "ObjectModel",
     "Observation",
     "Pose",
@@ -169,7 +172,7 @@ class Observation:
             return
         offset = np.asarray(self.contact.point) - np.asarray(self.path.origin)
         along = float(offset @ np.asarray(self.path.direction))
-        if along < -1e-9 * max(1.0, self.path.length):
+        if along < -LENGTH_SLACK * max(1.0, self.path.length):
             raise InvalidObservationError(
                 "contact lies behind the path origin", field="contact.point"
             )
@@ -270,10 +273,20 @@ class ErrorBound:
     eps_t: float
 
 
+class InterpretationId(NamedTuple):
+    """Which interpretation of the tree a hypothesis was posed from: the `group`
+    (object and stable pose) and the `row` of its face assignment in that group.
+    The samples of one slide family (DESIGN §4.6) share it."""
+
+    group: int
+    row: int
+
+
 @dataclass(frozen=True)
 class Hypothesis:
     """One interpretation of the contacts: object, stable pose, face per contact
-    (None = spurious), pose with its error bound, and probability."""
+    (None = spurious), pose with its error bound, and probability; `interpretation`
+    says which interpretation of the tree it was posed from."""
 
     object: str
     stable_pose: int
@@ -282,4 +295,4 @@ class Hypothesis:
     error_bound: ErrorBound
     probability: float
     equivalence_class: int = 0
-    family: int = field(default=0, compare=False)
+    interpretation: InterpretationId = field(default=InterpretationId(-1, -1), compare=False)

@@ -9,10 +9,10 @@ one stable pose of probability 1. Coordinates are kept exactly as given.
 from __future__ import annotations
 
 import json
-from importlib import resources
 import math
 import os
 from collections.abc import Iterable, Mapping
+from importlib import resources
 from pathlib import Path
 from typing import Any
 

@@ -20,6 +20,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.errors import PlannerError
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK
 from planner.planning.casting import segment_distance
 from planner.types import SensingPath, SensorBounds, Workspace
 
@@ -268,7 +269,7 @@ def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
     samples = np.stack(np.meshgrid(*axes), axis=-1).reshape(-1, 2)
     depth = _grid_depth(posed, *axes).astype(float) @ posed.weight
     if depth.max(initial=0.0) > 0:
-        inside = samples[depth >= depth.max() - 1e-9]
+        inside = samples[depth >= depth.max() - SHARE_SLACK]
         chosen = list(aims) or [inside[0]]
         # farthest-point sampling spreads the remaining aims over the area
         gap = np.min([np.hypot(*(inside - a).T) for a in chosen], axis=0)
@@ -307,7 +308,7 @@ def _boundary_aims(
     for lo in range(0, len(pts), chunk):
         # blocking strength: weight of the classes with a face there
         strength[lo : lo + chunk] = shared[lo : lo + chunk] @ posed.class_weight
-    differs = strength < 1 - 1e-9
+    differs = strength < 1 - SHARE_SLACK
     pts, normals, strength = pts[differs], normals[differs], strength[differs]
     order = rng.permutation(len(pts))
     order = order[np.argsort(strength[order], kind="stable")]
@@ -339,9 +340,9 @@ def _blocking_pairs(
     fh, ff = np.nonzero(posed.valid)
     face_angle = np.arctan2(posed.normal[fh, ff, 1], posed.normal[fh, ff, 0])
     angle = np.arctan2(normals[:, 1], normals[:, 0])
-    # turn <= n_tol + 1e-9 with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
+    # turn <= n_tol + ANGLE_SLACK with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
     widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
-    n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + 1e-9), 1e-12)))
+    n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + SHARE_SLACK), 1e-12)))
     if n_buckets < 3:  # some tolerance spans a third of the directions: every face
         q = np.repeat(np.arange(len(pts)), len(fh))
         face = np.tile(np.arange(len(fh)), len(pts))
@@ -351,12 +352,12 @@ def _blocking_pairs(
     h, g = fh[face], owner[q]
     n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
     turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
-    keep = turn <= n_tol + 1e-9
+    keep = turn <= n_tol + ANGLE_SLACK
     q, face, h, g = q[keep], face[keep], h[keep], g[keep]
     p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
     s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
     dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
-    ok = dist <= p_tol + 1e-9 * posed.scale
+    ok = dist <= p_tol + LENGTH_SLACK * posed.scale
     return q[ok], h[ok]
 
 
@@ -466,7 +467,7 @@ def generate_candidates(
         a = np.repeat(ia, len(origins), axis=0)
         span = a - o
         length = np.hypot(*span.T)
-        ok = length > 1e-9 * workspace.radius
+        ok = length > LENGTH_SLACK * workspace.radius
         parts.append(_make(o[ok], span[ok] / length[ok, None], length[ok], a[ok], "intersection"))
 
     points, normals = _boundary_aims(posed, sensor, config, rng)
@@ -478,7 +479,7 @@ def generate_candidates(
             c, s = math.cos(turn), math.sin(turn)
             d = -normals @ np.array([[c, s], [-s, c]])
             o, to_aim, _ = paths_through(aims, d, workspace)
-            ok = np.isfinite(to_aim) & (to_aim > 1e-9 * workspace.radius)
+            ok = np.isfinite(to_aim) & (to_aim > LENGTH_SLACK * workspace.radius)
             parts.append(_make(o[ok], d[ok], to_aim[ok], aims[ok], "boundary"))
 
     extra = extra if extra is not None else Candidates.empty()

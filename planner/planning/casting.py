@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.geometry import wrap_angle
+from planner.geometry import LENGTH_SLACK, wrap_angle
 from planner.planning.posed_set import PosedSet
 
 __all__ = ["cast_paths", "segment_distance"]
@@ -99,7 +99,7 @@ class _Faces:
             centre_x=centre[:, 0],
             centre_y=centre[:, 1],
             radius=radius,
-            margin=1e-9 * posed.scale,
+            margin=LENGTH_SLACK * posed.scale,
         )
 
 

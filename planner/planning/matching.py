@@ -18,6 +18,7 @@ from typing import TYPE_CHECKING
 
 import numpy as np
 
+from planner.geometry import LENGTH_SLACK
 from planner.planning.bitsets import (
     IntervalUnions,
     close_ends,
@@ -314,7 +315,7 @@ class Slots:
 
     @classmethod
     def of(cls, posed: PosedSet, o: Outcomes, sensor: SensorBounds) -> Slots:
-        floor = 1e-9 * posed.scale
+        floor = LENGTH_SLACK * posed.scale
         # points within 2 eps_d + (eps_t(h) + eps_t(g)) / 2: each side brings its half
         reach = sensor.position_error + posed.eps_t[None, :, None] / 2 + o.slot_slack + floor / 2
         # normals within 2 phi + dtheta(h) + dtheta(g): likewise, plus the vertex cones

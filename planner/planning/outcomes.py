@@ -11,8 +11,9 @@ in radians (counter-clockwise positive). The pipeline is three numpy passes:
    contact at the very end of the path);
 3. :func:`planner.planning.confusability.class_survivors` compares the outcomes
    of every pair of hypotheses on every path within the §4.11 tolerances and
-   gives the survivor sets over equivalence classes as bitsets (:class:`SurvivorTable`). Slot points lie on
-   the path, so a match is an overlap of intervals along it and of normal arcs:
+   gives the survivor sets over equivalence classes as bitsets
+   (:class:`SurvivorTable`). Slot points lie on the path, so a match is an
+   overlap of intervals along it and of normal arcs:
    sorted interval ends answer all pairs at once with unions of bitsets, and
    only slots near a tie (or off the path) are compared one by one
    (:mod:`planner.planning.matching`). The hypothesis-level matrix
@@ -31,6 +32,7 @@ from dataclasses import dataclass, fields
 import numpy as np
 
 from planner.errors import PlannerError
+from planner.geometry import LENGTH_SLACK
 from planner.planning.casting import cast_paths
 from planner.planning.posed_set import PosedSet
 from planner.types import SensorBounds
@@ -137,7 +139,7 @@ class Outcomes:
 
 
 def _tolerances(posed: PosedSet, sensor: SensorBounds, config: OutcomeConfig) -> dict:
-    floor = 1e-9 * posed.scale
+    floor = LENGTH_SLACK * posed.scale
     # how far the true outline may lie from the posed one: half the error disk
     geometric = posed.eps_t / 2 + config.contact_patch + floor
     return {

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from planner.errors import PlanningNotPossibleError
-from planner.geometry import rotation_matrices
+from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.models.prior import draw_poses, draw_stable_poses
 from planner.planning.candidates import Candidates, paths_through, union_centre
 from planner.planning.posed_set import PosedSet
@@ -200,7 +200,7 @@ def _chords(aim: np.ndarray, angles: np.ndarray, workspace: Workspace, source: s
     d = span / np.maximum(dist, 1e-300)[:, None]
     # a chord from o along unit d on the circle |x - c| = R has length 2 d.(c - o)
     lengths = 2 * np.einsum("nk,nk->n", d, centre - origins)
-    ok = (dist > 1e-9 * workspace.radius) & (lengths > 1e-9 * workspace.radius)
+    ok = (dist > LENGTH_SLACK * workspace.radius) & (lengths > LENGTH_SLACK * workspace.radius)
     return Candidates(
         origins[ok],
         d[ok],

@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.geometry import wrap_angle
+from planner.geometry import SHARE_SLACK, wrap_angle
 from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, weighted_count
 from planner.planning.budget import Deadline
 from planner.planning.search import SearchResult, expected_remaining, state_value
@@ -49,7 +49,7 @@ FAMILIES = ("distinguishing", "informative", "partial", "uninformative")
 DISTINGUISHING, INFORMATIVE, PARTIAL, UNINFORMATIVE = range(4)
 
 #: Probabilities within this of 1 (or 0) count as 1 (or 0) for the families.
-FAMILY_TOLERANCE = 1e-9
+FAMILY_TOLERANCE = SHARE_SLACK
 
 
 @dataclass(frozen=True, eq=False)

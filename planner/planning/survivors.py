@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK
 from planner.planning.candidates import Candidates
 from planner.planning.outcomes import Outcomes
 from planner.planning.posed_set import PosedSet
@@ -58,7 +59,10 @@ def pin_families(
     cross = np.abs(n[..., 0] * u[:, None, 1] - n[..., 1] * u[:, None, 0])
     parallel = on.any(axis=1) & np.all(~on | (cross <= tol), axis=1)
     ident: dict[tuple, int] = {}
-    label = [ident.setdefault((h.family, h.object, h.stable_pose), len(ident)) for h in hypotheses]
+    label = [
+        ident.setdefault((h.interpretation, h.object, h.stable_pose), len(ident))
+        for h in hypotheses
+    ]
     _, family = np.unique(np.column_stack([label, assigned]), axis=0, return_inverse=True)
     family = np.where(parallel, family.ravel(), -1)
     members = np.bincount(posed.cls, minlength=posed.n_classes)
@@ -107,11 +111,11 @@ def repeated_paths(
     if not len(cands) or not observations:
         return out
     eps_d, phi = sensor.position_error, sensor.normal_error
-    reach = 2 * eps_d + float(posed.eps_t.min()) / 2 + 1e-9 * posed.scale
+    reach = 2 * eps_d + float(posed.eps_t.min()) / 2 + LENGTH_SLACK * posed.scale
     d = cands.directions
     for obs in observations:
         o, u = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
-        same_way = d @ u >= np.cos(2 * phi + 1e-9)
+        same_way = d @ u >= np.cos(2 * phi + ANGLE_SLACK)
         if obs.contact is not None:
             x = np.broadcast_to(np.asarray(obs.contact.point, dtype=float), d.shape)
         else:  # the missed path's point nearest each candidate's aim

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.geometry import rotation_matrices, wrap_angle
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, rotation_matrices, wrap_angle
 
 __all__ = ["ConsistentSet", "consistent_poses", "consistent_set_bounds", "consistent_volume"]
 
@@ -87,7 +87,7 @@ def consistent_set_bounds(
         return ConsistentSet(moved, dth, feasible)
     from_end = np.cumsum(assigned[:, ::-1], axis=1)[:, ::-1]
     use = assigned & (from_end <= max_contacts)
-    slack = 1e-9  # rounding of the measured angles
+    slack = ANGLE_SLACK  # rounding of the measured angles
     lo, hi = _theta_interval(normals, face_normals, use, theta, phi + slack)
     lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
     per_row = samples * s * (s - 1) * 2 * max(P, s)
@@ -232,7 +232,7 @@ def _polygons(
     i, j = pairs[:, 0], pairs[:, 1]
     a, b = n[:, :, i], n[:, :, j]
     det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    good = (np.abs(det) > SHARE_SLACK) & use[:, None, i] & use[:, None, j]
     det = np.where(good, det, 1.0)
     w = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None, None]
     ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
@@ -241,7 +241,7 @@ def _polygons(
     vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
     vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
     proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
-    tol = 1e-9 * (1.0 + np.abs(centre)) + 1e-12
+    tol = LENGTH_SLACK * (1.0 + np.abs(centre)) + 1e-12
     inside = np.abs(proj - centre[:, :, None, :]) <= w + tol[:, :, None, :]
     ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
     return vx, vy, ok, good.any(axis=(1, 2))

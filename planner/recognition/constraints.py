@@ -21,15 +21,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.geometry import segment_segment_distance, wrap_angle
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
 from planner.types import Contact, Faces, StablePose
 
 __all__ = ["ConstraintTables", "build_tables", "pair_feasibility", "unary_feasibility"]
 
 #: Relative slack (of the object size) added to every length bound, and absolute
 #: slack (radians) added to every angle bound, so the bounds' edges pass.
-LENGTH_SLACK = 1e-9
-ANGLE_SLACK = 1e-9
 
 
 @dataclass(frozen=True, eq=False)

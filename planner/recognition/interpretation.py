@@ -24,7 +24,14 @@ from typing import Literal
 import numpy as np
 import shapely
 
-from planner.geometry import point_segment_distance, rotation_matrices, wrap_angle
+from planner.geometry import (
+    ANGLE_SLACK,
+    LENGTH_SLACK,
+    SHARE_SLACK,
+    point_segment_distance,
+    rotation_matrices,
+    wrap_angle,
+)
 from planner.memo import cached_property
 from planner.recognition.consistent import (
     consistent_poses,
@@ -32,8 +39,6 @@ from planner.recognition.consistent import (
     consistent_volume,
 )
 from planner.recognition.constraints import (
-    ANGLE_SLACK,
-    LENGTH_SLACK,
     ConstraintTables,
     build_tables,
     pair_feasibility,
@@ -293,7 +298,7 @@ def _clear_paths(
 def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
     """Round tolerances UP onto a geometric grid (sound: a larger shrink is more lenient)."""
     tol = np.maximum(tol, floor)
-    return floor * 1.15 ** np.ceil(np.log(tol / floor) / math.log(1.15) - 1e-9)
+    return floor * 1.15 ** np.ceil(np.log(tol / floor) / math.log(1.15) - SHARE_SLACK)
 
 
 def _free_space_ok(
@@ -490,7 +495,7 @@ def evaluate(
         ok &= reach <= workspace.radius + eps_t / 2 + slack
 
     # free space: path up to each contact (less eps_d), and each missed path whole
-    floor = max(slack, 1e-9)
+    floor = max(slack, LENGTH_SLACK)
     shrink = eps_t / 2 + slack
     ok = _clear_paths(group, observations, a_src, theta, t, shrink, ok, eps_d + slack, floor)
 

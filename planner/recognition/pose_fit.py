@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from planner.geometry import rotation_matrices
+from planner.geometry import SHARE_SLACK, rotation_matrices
 
 __all__ = ["FitBatch", "PoseFilter", "fit_batch", "lifted_rows", "noise_scales"]
 
@@ -315,7 +315,7 @@ class PoseFilter:
             ys = np.concatenate([v for _, v in self._pending])
             Ws = np.tile(self._weights, len(self._pending))
             info = Hs.T @ (Ws[:, None] * Hs)
-            if np.linalg.matrix_rank(info, tol=1e-9 * np.abs(info).max()) < 4:
+            if np.linalg.matrix_rank(info, tol=SHARE_SLACK * np.abs(info).max()) < 4:
                 return
             ekf = ExtendedKalmanFilter(dim_x=4, dim_z=3)
             ekf.P = np.linalg.inv(info)

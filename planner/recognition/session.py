@@ -30,9 +30,8 @@ from scipy.sparse.csgraph import connected_components
 from scipy.spatial import cKDTree
 
 from planner.errors import InvalidObservationError
-from planner.geometry import rotation_matrices
+from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.memo import cached_property
-from planner.recognition.constraints import LENGTH_SLACK
 from planner.recognition.interpretation import (
     Group,
     PoseSamples,
@@ -45,6 +44,7 @@ from planner.recognition.interpretation import (
 from planner.types import (
     ErrorBound,
     Hypothesis,
+    InterpretationId,
     ObjectModel,
     Observation,
     Pose,
@@ -195,7 +195,7 @@ class Session:
                         ),
                         probability=float(prob[i]),
                         equivalence_class=int(rank[classes[i]]),
-                        family=int(c.group * 1_000_000 + c.row[k]),
+                        interpretation=InterpretationId(c.group, int(c.row[k])),
                     )
                 )
                 i += 1
@@ -209,7 +209,7 @@ class Session:
         ``max(core eps_t)/2`` of each other (Hausdorff), core eps_t leaving out a
         family sample's cell: samples along one slide family are never merged.
         """
-        verts, centroid, tol, family, nvert = [], [], [], [], []
+        verts, centroid, tol, group, row, nvert = [], [], [], [], [], []
         for c in cands:
             stable = self._groups[c.group].stable
             R = rotation_matrices(c.theta)
@@ -217,11 +217,12 @@ class Session:
             verts.extend(posed)
             centroid.append(posed.mean(axis=1))
             tol.append((c.eps_t - c.cell) / 2)
-            family.append(c.group * 1_000_000 + c.row)
+            group.append(np.full(len(c.row), c.group))
+            row.append(c.row)
             nvert.extend([len(stable.outline)] * len(c.weight))
         centroid_a = np.concatenate(centroid)
         tol_a = np.concatenate(tol) + 10 * LENGTH_SLACK * self.length_scale
-        family_a = np.concatenate(family)
+        group_a, row_a = np.concatenate(group), np.concatenate(row)
         nvert_a = np.asarray(nvert)
         n = len(centroid_a)
         pairs = cKDTree(centroid_a).query_pairs(
@@ -229,7 +230,8 @@ class Session:
         )
         if len(pairs):
             i, j = pairs[:, 0], pairs[:, 1]
-            ok = (nvert_a[i] == nvert_a[j]) & (family_a[i] != family_a[j])
+            same = (group_a[i] == group_a[j]) & (row_a[i] == row_a[j])
+            ok = (nvert_a[i] == nvert_a[j]) & ~same
             i, j = i[ok], j[ok]
             keep = np.zeros(len(i), dtype=bool)
             for v in np.unique(nvert_a[i]):
