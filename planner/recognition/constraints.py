@@ -75,7 +75,7 @@ def pair_feasibility(
 ) -> np.ndarray:
     """Boolean F x F matrix: may `first` lie on face a and `second` on face b?
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
     >>> square = make_stable_pose([[0, 0], [2, 0], [2, 2], [0, 2]])
     >>> t = build_tables(square.faces)
     >>> ok = pair_feasibility(t, Contact((1, 0), (0, -1)), Contact((2, 1), (1, 0)), 0.0, 0.0)

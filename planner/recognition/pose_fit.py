@@ -194,17 +194,7 @@ def fit_batch(
     sens = sens_origin.copy()
     sens[:, :, :2, :] += arm[:, None, :, None] * sens_origin[:, :, None, 2, :]
 
-    # pose-space information of the point-on-line and normal residuals:
-    # line r = n_w·(p - t) - d:  dr/dt = -n_w,  dr/dtheta = (J n_w)·(p - t);  angle: dr/dtheta = -1
-    n_w = np.einsum("kij,ksj->ksi", R, face_normals)
-    lever = np.einsum("ksi,ksi->ks", n_w @ _J.T, points - t[:, None, :])
-    g = np.concatenate([-n_w, lever[..., None]], axis=-1)  # (K, s, 3)
-    info_pose = np.einsum("ksi,ks,ksj->kij", g, assigned / sigma_d**2, g)
-    info_pose[:, 2, 2] += assigned.sum(axis=1) / sigma_phi**2
-    tau = slide / np.linalg.norm(slide, axis=1, keepdims=True)
-    pin_pose = np.concatenate([tau, np.zeros((K, 1))], axis=1)
-    info_pose += (~rank2)[:, None, None] * np.einsum("ki,kj->kij", pin_pose, pin_pose) / sigma_d**2
-    cov = np.linalg.inv(info_pose)
+    cov = _pose_covariance(R, t, slide, rank2, points, face_normals, assigned, sigma_d, sigma_phi)
     resid = y - np.einsum("ksri,ki->ksr", H, z)
     chi2 = np.einsum("ksr,ksr->k", W, resid**2)
     return FitBatch(
@@ -218,6 +208,38 @@ def fit_batch(
         chi2=chi2,
         z=z,
     )
+
+
+def _pose_covariance(
+    R: np.ndarray,
+    t: np.ndarray,
+    slide: np.ndarray,
+    rank2: np.ndarray,
+    points: np.ndarray,
+    face_normals: np.ndarray,
+    assigned: np.ndarray,
+    sigma_d: float,
+    sigma_phi: float,
+) -> np.ndarray:
+    """Covariance (K, 3, 3) of the pose (x, y, theta) at the row weights.
+
+    `R` (K, 2, 2), `t` (K, 2) the fitted poses, `slide` (K, 2) the world slide
+    direction of rank-1 rows (`rank2` False), pinned along it at sigma_d; `points`
+    (K, s, 2) the measured contacts (world), `face_normals` (K, s, 2) their model
+    faces' normals, `assigned` (K, s) which contacts count.
+    """
+    K = assigned.shape[0]
+    # pose-space information of the point-on-line and normal residuals:
+    # line r = n_w·(p - t) - d:  dr/dt = -n_w,  dr/dtheta = (J n_w)·(p - t);  angle: dr/dtheta = -1
+    n_w = np.einsum("kij,ksj->ksi", R, face_normals)
+    lever = np.einsum("ksi,ksi->ks", n_w @ _J.T, points - t[:, None, :])
+    g = np.concatenate([-n_w, lever[..., None]], axis=-1)  # (K, s, 3)
+    info_pose = np.einsum("ksi,ks,ksj->kij", g, assigned / sigma_d**2, g)
+    info_pose[:, 2, 2] += assigned.sum(axis=1) / sigma_phi**2
+    tau = slide / np.linalg.norm(slide, axis=1, keepdims=True)
+    pin_pose = np.concatenate([tau, np.zeros((K, 1))], axis=1)
+    info_pose += (~rank2)[:, None, None] * np.einsum("ki,kj->kij", pin_pose, pin_pose) / sigma_d**2
+    return np.linalg.inv(info_pose)
 
 
 def worst_case_bounds(

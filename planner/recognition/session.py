@@ -32,15 +32,9 @@ from scipy.spatial import cKDTree
 from planner.errors import InvalidObservationError
 from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.memo import cached_property
-from planner.recognition.interpretation import (
-    Group,
-    PoseSamples,
-    RecognitionConfig,
-    TreeLevel,
-    evaluate,
-    extend,
-    make_groups,
-)
+from planner.recognition.config import RecognitionConfig
+from planner.recognition.evaluate import PoseSamples, evaluate
+from planner.recognition.tree import Group, TreeLevel, extend, make_groups
 from planner.types import (
     ErrorBound,
     Hypothesis,

@@ -10,7 +10,7 @@ import shapely
 
 from planner.errors import InvalidObservationError
 from planner.models.library import object_from_dict
-from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
 from tests.conftest import WORKSPACE, object_set

@@ -1,0 +1,137 @@
+"""Interpretations -> posed, weighted hypotheses (DESIGN §4.4-4.7).
+
+:func:`evaluate` takes the surviving rows of one group of the interpretation tree
+(:mod:`planner.recognition.tree`) through the steps of the DESIGN, each a function
+of its own:
+
+1. rotation gate and pose fit (§4.4, :mod:`planner.recognition.poses`);
+2. error bounds of the fit (§4.4);
+3. slide-family samples of under-constrained rows (§4.6);
+4. error bounds of each sample (§4.4, §4.6);
+5. model check: every contact on its FINITE face within ``eps_d + eps_t/2`` and
+   its normal within ``phi + |dtheta|``; optionally the posed outline inside the
+   safe circle (§4.5, :mod:`planner.recognition.model_check`);
+6. free-space check: the path up to each contact (less ``eps_d``), and every
+   missed path whole, outside the posed outline shrunk by ``eps_t/2`` (§4.5);
+7. weights (§4.7, :mod:`planner.recognition.weights`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.geometry import LENGTH_SLACK
+from planner.recognition.config import RecognitionConfig
+from planner.recognition.model_check import free_space_check, inside_workspace, model_check
+from planner.recognition.poses import (
+    fit_bounds,
+    fit_poses,
+    rotation_gate,
+    sample_bounds,
+    slide_samples,
+)
+from planner.recognition.tree import Group
+from planner.recognition.weights import residual_fitness, weights
+from planner.types import Observation, SensorBounds, Workspace
+
+__all__ = ["PoseSamples", "evaluate"]
+
+
+@dataclass(frozen=True, eq=False)
+class PoseSamples:
+    """Posed samples of the surviving interpretations of one group (arrays, length N)."""
+
+    group: int
+    row: np.ndarray  # index into the group's rows
+    theta: np.ndarray
+    t: np.ndarray  # (N, 2)
+    d_translation: np.ndarray  # |dt| bound of the pose translation
+    d_theta: np.ndarray
+    eps_t: np.ndarray
+    cell: np.ndarray  # slide cell length of a family sample (0 when the pose is determined)
+    weight: np.ndarray  # unnormalized posterior weight
+
+
+def _no_samples(group_index: int) -> PoseSamples:
+    none = np.zeros(0)
+    return PoseSamples(
+        group_index, np.zeros(0, np.int64), none, np.zeros((0, 2)), none, none, none, none, none
+    )
+
+
+def evaluate(
+    group_index: int,
+    group: Group,
+    rows: np.ndarray,
+    observations: list[Observation],
+    bounds: SensorBounds,
+    workspace: Workspace,
+    config: RecognitionConfig,
+    length_scale: float,
+) -> PoseSamples:
+    """Fit, sample and model-check every row of one group against all observations."""
+    eps_d, phi = bounds.position_error, bounds.normal_error
+    stable = group.stable
+    faces = stable.faces
+    slack = LENGTH_SLACK * length_scale * 10
+    contact_obs = [o for o in observations if o.contact is not None]
+    assigned = rows >= 0
+    keep = np.flatnonzero(assigned.any(axis=1)) if rows.size else np.zeros(0, np.int64)
+    if keep.size == 0 or not contact_obs:
+        return _no_samples(group_index)
+    rows, assigned = rows[keep], assigned[keep]
+    face = np.maximum(rows, 0)
+    P = np.array([o.contact.point for o in contact_obs])  # type: ignore[union-attr]
+    U = np.array([o.contact.normal for o in contact_obs])  # type: ignore[union-attr]
+    psi = np.arctan2(U[:, 1], U[:, 0])
+
+    gate = rotation_gate(psi, faces.angle[face], assigned, phi)
+    assigned, face, keep = assigned[gate], face[gate], keep[gate]
+    if face.shape[0] == 0:
+        return _no_samples(group_index)
+
+    pose = fit_poses(stable, P, U, face, assigned, eps_d, phi, length_scale)
+    fit_bound = fit_bounds(pose, stable, assigned, eps_d, phi, config, slack)
+    samples = slide_samples(
+        pose,
+        faces,
+        face,
+        assigned,
+        fit_bound.margin,
+        fit_bound.eps_t,
+        config.max_family_samples,
+        length_scale,
+    )
+    bound = sample_bounds(
+        pose, fit_bound, samples, stable, P, U, face, assigned, eps_d, phi, config, slack
+    )
+    src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
+    f_src, a_src = face[src], assigned[src]
+
+    ok = bound.feasible & model_check(
+        faces, f_src, a_src, P, psi, theta, t, eps_t, bound.d_theta, eps_d, phi, slack
+    )
+    if config.require_inside_workspace:
+        ok &= inside_workspace(stable.outline, theta, t, eps_t, workspace, slack)
+    ok = free_space_check(group, observations, a_src, theta, t, eps_t, ok, eps_d, slack)
+
+    fitness = residual_fitness(
+        group, observations, pose, samples, P, U, face, assigned, ok, eps_d, phi, config, slack
+    )
+    dirs = np.array([o.path.direction for o in contact_obs])
+    weight = weights(group.prior, pose, samples, faces, f_src, a_src, dirs, fitness, config)
+
+    sel = np.flatnonzero(ok & (weight > 0))
+    return PoseSamples(
+        group=group_index,
+        row=keep[src[sel]],
+        theta=theta[sel],
+        t=t[sel],
+        d_translation=bound.d_translation[sel],
+        d_theta=bound.d_theta[sel],
+        eps_t=eps_t[sel],
+        cell=samples.cell[src[sel]],
+        weight=weight[sel],
+    )

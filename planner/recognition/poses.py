@@ -1,0 +1,309 @@
+"""Poses of interpretations: rotation gate, pose fit, error bounds and slide-family
+samples (DESIGN §4.4, §4.6).
+
+Each step works on the K surviving rows of one group (a stable pose of an object)
+at once: `face` (K, s) the face each row assigns to each of the s contacts (0
+where spurious), `assigned` (K, s) which contacts it assigns; `points`, `normals`
+(s, 2) the measured contacts (world frame).
+
+Interpretations whose faces are all parallel leave the translation free along
+the faces: the family's feasible slide interval is sampled at a spacing of about
+``eps_t`` (at most `max_family_samples`); each sample's error bound covers half
+its cell and its weight carries the cell length.
+
+Lengths in the object files' unit, angles in radians (counter-clockwise
+positive); a pose maps model points v to ``R(theta) v + t``.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from planner.geometry import ANGLE_SLACK, rotation_matrices, wrap_angle
+from planner.recognition.config import RecognitionConfig
+from planner.recognition.consistent import consistent_set_bounds
+from planner.recognition.pose_fit import (
+    FitBatch,
+    fit_batch,
+    noise_scales,
+    point_bounds,
+    worst_case_bounds,
+)
+from planner.types import Faces, StablePose
+
+__all__ = [
+    "FitBounds",
+    "PoseFit",
+    "SampleBounds",
+    "SlideSamples",
+    "determined_rows",
+    "fit_bounds",
+    "fit_poses",
+    "rotation_gate",
+    "sample_bounds",
+    "slide_samples",
+]
+
+_TURN = np.array([[0.0, -1.0], [1.0, 0.0]])  # +90 degrees
+
+
+def rotation_gate(
+    psi: np.ndarray, face_angle: np.ndarray, assigned: np.ndarray, phi: float
+) -> np.ndarray:
+    """(K,) can one rotation turn every assigned face normal onto its contact's?
+
+    `psi` (s,) the measured normals' angles, `face_angle` (K, s) the assigned
+    faces' normal angles (model frame), `phi` the normal error bound (radians).
+    """
+    # rotation gate: every angle(u_j) - angle(n_a) within 2 phi of their circular mean
+    delta = wrap_angle(psi[None, :] - face_angle)
+    mean = np.arctan2((np.sin(delta) * assigned).sum(1), (np.cos(delta) * assigned).sum(1))
+    return np.all(
+        ~assigned | (np.abs(wrap_angle(delta - mean[:, None])) <= 2 * phi + ANGLE_SLACK), 1
+    )
+
+
+@dataclass(frozen=True, eq=False)
+class PoseFit:
+    """The fit of K rows (:class:`planner.recognition.pose_fit.FitBatch`) with what
+    sampling their slide families needs: `sigma_d` the position scale the rows were
+    weighted at, `slide_axis` (K, 2) the face direction e (model frame) a rank-1
+    row slides along, `rho` (K,) the lifted scale |(c, s)|, and `model_points`
+    (K, s, 2) the contacts' model points at the fit."""
+
+    fit: FitBatch
+    sigma_d: float
+    slide_axis: np.ndarray
+    rho: np.ndarray
+    model_points: np.ndarray
+
+
+def fit_poses(
+    stable: StablePose,
+    points: np.ndarray,
+    normals: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    eps_d: float,
+    phi: float,
+    length_scale: float,
+) -> PoseFit:
+    """Least-squares pose of every row over its assigned contacts (DESIGN §4.4),
+    the bounds' reference point at the outline's centroid; rank-1 rows pinned at
+    slide coordinate 0."""
+    faces = stable.faces
+    sigma_d, sigma_phi = noise_scales(eps_d, phi, length_scale)
+    ref = np.broadcast_to(stable.centroid, (len(face), 2))
+    fit = fit_batch(
+        points, normals, faces.normal[face], faces.offset[face], assigned, ref, sigma_d, sigma_phi
+    )
+    # rank-1 families slide along e (model frame): t(s) = t0 + s slide, so a model point v
+    # of the sample at s sits where the point v - s e / rho sits at s = 0
+    R = rotation_matrices(fit.theta)
+    rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
+    e = faces.normal[face[np.arange(len(face)), np.argmax(assigned, 1)]] @ _TURN.T
+    m0 = np.einsum("kji,ksj->ksi", R, points[None] - fit.t[:, None, :])  # contacts' model points
+    return PoseFit(fit=fit, sigma_d=sigma_d, slide_axis=e, rho=rho, model_points=m0)
+
+
+@dataclass(frozen=True, eq=False)
+class FitBounds:
+    """Error bounds of each row's fit at slide coordinate 0 (K rows): `eps_t` the
+    error-disk diameter (length), `d_theta` the rotation bound (radians), `margin`
+    (K, s) how far each contact may lie beyond its face's ends, and `second` the
+    second-order allowance of the linearization (0 in `thesis` mode)."""
+
+    eps_t: np.ndarray
+    d_theta: np.ndarray
+    margin: np.ndarray
+    second: float
+
+
+def fit_bounds(
+    pose: PoseFit,
+    stable: StablePose,
+    assigned: np.ndarray,
+    eps_d: float,
+    phi: float,
+    config: RecognitionConfig,
+    slack: float,
+) -> FitBounds:
+    """Error bounds of the fits (DESIGN §4.4): `linearized`, the worst case of the
+    first-order sensitivities to errors within (eps_d, phi), plus a second-order
+    allowance; `thesis`, a fixed error disk of `thesis_fraction` of the effective
+    diameter."""
+    fit = pose.fit
+    r_c = stable.centroid_radius
+    if config.bound_mode != "thesis":
+        _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
+        # second-order allowance for the linearization: rotations by up to phi
+        second = (phi**2) * r_c + phi * eps_d
+        d_th = d_th * (1 + phi) + phi**2
+        # first-order worst case at every outline vertex (at s = 0: for the sample spacing)
+        moved = point_bounds(fit, stable.outline, assigned, eps_d, phi)
+        eps_t0 = 2 * (moved.max(axis=1) * (1 + phi) + second)
+        # a contact's own model point moves by at most this: its slide margin
+        at_contact = point_bounds(fit, pose.model_points, assigned, eps_d, phi)
+        margin = eps_d + at_contact * (1 + phi) + second + slack
+    else:
+        second = 0.0
+        eps_t0 = np.full(len(fit.theta), config.thesis_fraction * 2 * r_c)
+        d_th = eps_t0 / (2 * r_c)
+        margin = np.broadcast_to((eps_d + eps_t0 / 2 + slack)[:, None], assigned.shape)
+    return FitBounds(eps_t=eps_t0, d_theta=d_th, margin=margin, second=second)
+
+
+@dataclass(frozen=True, eq=False)
+class SlideSamples:
+    """Posed samples of K rows (N samples): `src` (N,) the row of each sample, `s`
+    (N,) its slide coordinate (0 for a determined pose), `theta` (N,), `t` (N, 2)
+    its pose; per row (K,): `family` (rank 1: the translation slides), `cell` the
+    slide cell length of its samples (0 when the pose is determined) and
+    `span_scale` the share of the sampled span its nominal span (no margin) is."""
+
+    src: np.ndarray
+    s: np.ndarray
+    theta: np.ndarray
+    t: np.ndarray
+    family: np.ndarray
+    cell: np.ndarray
+    span_scale: np.ndarray
+
+
+def slide_samples(
+    pose: PoseFit,
+    faces: Faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    margin: np.ndarray,
+    eps_t: np.ndarray,
+    max_samples: int,
+    length_scale: float,
+) -> SlideSamples:
+    """One sample per determined row; for rank-1 rows (DESIGN §4.6) the slide
+    interval keeping every contact on its finite face (widened by `margin` (K, s)),
+    cut into at most `max_samples` cells of about `eps_t` (K,), a sample at each
+    cell's middle. Rows whose interval is empty get no sample."""
+    fit, e, rho, m0 = pose.fit, pose.slide_axis, pose.rho, pose.model_points
+    # rank-1 families: feasible slide interval (each contact on its finite face), sampled
+    fdir = faces.direction[face]
+    mu0 = np.einsum("ksi,ksi->ks", m0 - faces.start[face], fdir)
+    rate = np.einsum("ki,ksi->ks", e, fdir) / rho[:, None]  # d mu / d s (= ±1/rho)
+    lo_mu, hi_mu = -margin, faces.length[face] + margin
+    with np.errstate(divide="ignore", invalid="ignore"):
+        s_a, s_b = (lo_mu - mu0) / rate, (hi_mu - mu0) / rate
+    s_lo = np.where(assigned, np.minimum(s_a, s_b), -np.inf).max(1)
+    s_hi = np.where(assigned, np.maximum(s_a, s_b), np.inf).min(1)
+    family = ~fit.rank2
+    alive = fit.rank2 | (s_hi >= s_lo)
+    span = np.where(family & alive, s_hi - s_lo, 0.0)
+    # the family's weight carries its nominal span (no margin); the margin only places samples
+    with np.errstate(divide="ignore", invalid="ignore"):
+        n_a, n_b = (0.0 - mu0) / rate, (faces.length[face] - mu0) / rate
+    nominal = np.where(assigned, np.maximum(n_a, n_b), np.inf).min(1) - np.where(
+        assigned, np.minimum(n_a, n_b), -np.inf
+    ).max(1)
+    nominal = np.clip(nominal, np.minimum(span, eps_t), span)
+    span_scale = np.where(span > 0, nominal / np.where(span > 0, span, 1.0), 1.0)
+    n = np.where(
+        family,
+        np.clip(np.ceil(span / np.maximum(eps_t, 1e-12 * length_scale)), 1, max_samples),
+        1,
+    ).astype(np.int64)
+    n = np.where(alive, n, 0)
+    cell = np.where(family, span / np.maximum(n, 1), 0.0)
+
+    src = np.repeat(np.arange(len(face)), n)
+    offset = np.arange(len(src)) - np.repeat(np.cumsum(n) - n, n)
+    s_val = np.where(family[src], s_lo[src] + (offset + 0.5) * cell[src], 0.0)
+    theta = fit.theta[src]
+    t = fit.t[src] + s_val[:, None] * fit.slide[src]
+    return SlideSamples(
+        src=src, s=s_val, theta=theta, t=t, family=family, cell=cell, span_scale=span_scale
+    )
+
+
+def determined_rows(fit: FitBatch, src: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The determined (rank-2) rows `det` of a fit and, for the samples drawn from
+    them (`src` (N,) the row of each sample), `at` their sample indices and `pos`
+    their places in `det` (a rank-2 row has one sample)."""
+    det = np.flatnonzero(fit.rank2)
+    at = np.flatnonzero(fit.rank2[src])
+    pos = np.searchsorted(det, src[at])
+    return det, at, pos
+
+
+@dataclass(frozen=True, eq=False)
+class SampleBounds:
+    """Error bounds of each sample (N,): `d_translation` the |dt| bound of the pose
+    translation, `d_theta` (radians), `eps_t` the error-disk diameter swept along
+    the posed outline (its cell included), and `feasible`, False where no pose at
+    all keeps every contact within its bounds."""
+
+    d_translation: np.ndarray
+    d_theta: np.ndarray
+    eps_t: np.ndarray
+    feasible: np.ndarray
+
+
+def sample_bounds(
+    pose: PoseFit,
+    bounds: FitBounds,
+    samples: SlideSamples,
+    stable: StablePose,
+    points: np.ndarray,
+    normals: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    eps_d: float,
+    phi: float,
+    config: RecognitionConfig,
+    slack: float,
+) -> SampleBounds:
+    """Error bounds at each sample (DESIGN §4.4, §4.6): the fit's bounds moved to
+    the sample's slide coordinate and widened by half its cell; for determined
+    poses in `linearized` mode, the smaller of those and the bounds of the set of
+    poses consistent with the contacts
+    (:func:`planner.recognition.consistent.consistent_set_bounds`)."""
+    fit, faces = pose.fit, stable.faces
+    src, s_val, cell = samples.src, samples.s, samples.cell
+    e, rho = pose.slide_axis, pose.rho
+    eps_t0, d_th, second = bounds.eps_t, bounds.d_theta, bounds.second
+    origin_and_outline = np.vstack([[0.0, 0.0], stable.outline])
+    feasible = np.ones(len(src), dtype=bool)
+    if config.bound_mode != "thesis":
+        shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
+        moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
+        moved = moved * (1 + phi) + second
+        d_theta = d_th[src]
+        # determined poses: the set of poses consistent with every contact is often far
+        # smaller than the estimator's worst case (errors do not add up); keep the smaller
+        det, at, pos = determined_rows(fit, src)
+        if det.size:
+            found = consistent_set_bounds(
+                points,
+                normals,
+                faces.normal[face[det]],
+                faces.offset[face[det]],
+                assigned[det],
+                fit.theta[det],
+                fit.t[det],
+                origin_and_outline,
+                eps_d,
+                phi,
+            )
+            moved[at] = np.minimum(moved[at], found.moved[pos] + slack)
+            d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
+            # no pose keeps every contact within its bounds: the interpretation is out
+            feasible[at] &= found.feasible[pos]
+        eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
+        d_translation = moved[:, 0] + cell[src] / 2
+    else:
+        eps_t = eps_t0[src] + cell[src]
+        d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
+        d_theta = d_th[src]
+    return SampleBounds(
+        d_translation=d_translation, d_theta=d_theta, eps_t=eps_t, feasible=feasible
+    )

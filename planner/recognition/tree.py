@@ -1,0 +1,112 @@
+"""Interpretation tree: face assignments of the contacts (DESIGN §4.3).
+
+Depth = number of contacts; branches = the faces of every stable pose of every
+object, plus an optional "spurious" branch (face -1) for at most `max_outliers`
+contacts. A new contact extends each surviving partial interpretation only:
+constraint checks first (table lookups, :mod:`planner.recognition.constraints`),
+then the model check on the fitted pose (:mod:`planner.recognition.evaluate`).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+import shapely
+
+from planner.memo import cached_property
+from planner.recognition.config import RecognitionConfig
+from planner.recognition.constraints import (
+    ConstraintTables,
+    build_tables,
+    pair_feasibility,
+    unary_feasibility,
+)
+from planner.types import Contact, ObjectModel, SensorBounds, StablePose
+
+__all__ = ["Group", "TreeLevel", "extend", "make_groups"]
+
+
+@dataclass(frozen=True, eq=False)
+class Group:
+    """One stable pose of one object: a subtree of the interpretation tree."""
+
+    object_index: int
+    model: ObjectModel
+    pose_index: int
+    prior: float
+
+    @property
+    def stable(self) -> StablePose:
+        return self.model.stable_poses[self.pose_index]
+
+    @cached_property
+    def tables(self) -> ConstraintTables:
+        return build_tables(self.stable.faces)
+
+    def shrunk(self, tol: float) -> shapely.Geometry:
+        """The model outline shrunk by `tol` (cached per tolerance bucket), prepared."""
+        cache = self.__dict__.setdefault("_shrunk", {})
+        if tol not in cache:
+            geom = (
+                self.stable.shape.buffer(-tol, join_style="mitre") if tol > 0 else self.stable.shape
+            )
+            shapely.prepare(geom)
+            cache[tol] = geom
+        return cache[tol]
+
+
+def make_groups(models: list[ObjectModel]) -> list[Group]:
+    """One group per stable pose; prior = P(object) x P(stable pose | object)."""
+    weights = np.array([m.prior if m.prior is not None else 1.0 for m in models])
+    weights = weights / weights.sum()
+    groups = []
+    for i, model in enumerate(models):
+        pose_total = sum(p.probability for p in model.stable_poses)
+        for j, pose in enumerate(model.stable_poses):
+            groups.append(Group(i, model, j, float(weights[i] * pose.probability / pose_total)))
+    return groups
+
+
+@dataclass(frozen=True, eq=False)
+class TreeLevel:
+    """Surviving partial interpretations per group: rows (K, depth) of face indices (-1 =
+    spurious), plus the pair-feasibility matrices computed so far, keyed (group, j, k)."""
+
+    rows: tuple[np.ndarray, ...]
+    pair_cache: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict)
+
+
+def extend(
+    level: TreeLevel,
+    groups: list[Group],
+    contacts: list[Contact],
+    bounds: SensorBounds,
+    config: RecognitionConfig,
+) -> TreeLevel:
+    """Extend every surviving row by the newest contact (constraint checks only)."""
+    k = len(contacts) - 1
+    new = contacts[k]
+    cache = dict(level.pair_cache)
+    out = []
+    for g, (group, rows) in enumerate(zip(groups, level.rows, strict=True)):
+        F = len(group.stable.faces)
+        ok = np.broadcast_to(
+            unary_feasibility(group.stable, new, config.normal_z_error), (len(rows), F)
+        ).copy()
+        for j in range(k):
+            key = (g, j, k)
+            if key not in cache:
+                cache[key] = pair_feasibility(
+                    group.tables, contacts[j], new, bounds.position_error, bounds.normal_error
+                )
+            col = rows[:, j]
+            ok &= np.where(col[:, None] >= 0, cache[key][np.maximum(col, 0)], True)
+        parent, face = np.nonzero(ok)
+        grown = [np.column_stack([rows[parent], face])]
+        outliers = (rows < 0).sum(axis=1)
+        spare = np.flatnonzero(outliers < config.max_outliers)
+        if spare.size:
+            grown.append(np.column_stack([rows[spare], np.full(spare.size, -1)]))
+        out.append(np.concatenate(grown).astype(np.int64))
+    return TreeLevel(rows=tuple(out), pair_cache=cache)

@@ -1,0 +1,199 @@
+"""Weights of posed samples (DESIGN §4.7).
+
+weight = prior x incidence likelihood x pose volume x residual fitness (x the
+Gaussian residual term in `gaussian` mode) x outlier probability per spurious
+contact. The prior is P(object) x P(stable pose | object); a contact on face a
+from a path with direction `dir` is likelier the squarer the hit, ``|dir·n_a|``;
+the pose volume is the Laplace volume of the fit (a slide family's carries its
+cell); the residual fitness is the bounded-error likelihood of the contacts, the
+share of the poses consistent with them that the errors left
+(:mod:`planner.recognition.consistent`).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices
+from planner.recognition.config import RecognitionConfig
+from planner.recognition.consistent import consistent_poses, consistent_volume
+from planner.recognition.model_check import clear_paths
+from planner.recognition.poses import PoseFit, SlideSamples, determined_rows
+from planner.recognition.tree import Group
+from planner.types import Faces, Observation
+
+__all__ = ["residual_fitness", "weights"]
+
+#: Least share of the consistent set a determined pose keeps in its weight.
+_FITNESS_FLOOR = 1e-6
+
+
+def residual_fitness(
+    group: Group,
+    observations: list[Observation],
+    pose: PoseFit,
+    samples: SlideSamples,
+    points: np.ndarray,
+    normals: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    ok: np.ndarray,
+    eps_d: float,
+    phi: float,
+    config: RecognitionConfig,
+    slack: float,
+) -> np.ndarray:
+    """(N,) bounded-error likelihood of each sample's contacts, in (0, 1].
+
+    Determined poses in `linearized` mode: the volume of the poses consistent with
+    the contacts as measured over that with the contacts moved onto the fitted
+    faces, times, for samples the checks kept (`ok` (N,)), the share of that set
+    which also keeps every contact on its finite face and every path clear of the
+    outline. 1 for slide-family samples and in `thesis` mode. `face`, `assigned`
+    (K, s) are the rows the samples were drawn from.
+    """
+    fit, faces = pose.fit, group.stable.faces
+    src = samples.src
+    fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
+    det, at, pos = determined_rows(fit, src)
+    if config.bound_mode == "thesis" or det.size == 0:
+        return fitness
+    fitness[at] = _fitness(
+        points, normals, faces, face[det], assigned[det], fit.theta[det], fit.t[det], eps_d, phi
+    )[pos]
+    # determined poses: the share of their consistent set that also keeps every
+    # contact on its finite face and every path clear of the outline, exactly
+    live = np.flatnonzero(ok[at])
+    if live.size:
+        # poses spread over each determined row's consistent set
+        spread = consistent_poses(
+            points,
+            normals,
+            faces.normal[face[det]],
+            faces.offset[face[det]],
+            assigned[det],
+            fit.theta[det],
+            eps_d,
+            phi,
+        )
+        fitness[at[live]] *= _admitted_share(
+            group,
+            observations,
+            points,
+            face[src[at[live]]],
+            assigned[src[at[live]]],
+            spread[0][pos[live]],
+            spread[1][pos[live]],
+            spread[2][pos[live]],
+            eps_d,
+            max(slack, LENGTH_SLACK),
+        )
+    return fitness
+
+
+def weights(
+    prior: float,
+    pose: PoseFit,
+    samples: SlideSamples,
+    faces: Faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    directions: np.ndarray,
+    fitness: np.ndarray,
+    config: RecognitionConfig,
+) -> np.ndarray:
+    """(N,) unnormalized posterior weight of each sample.
+
+    `prior` of the group; `face`, `assigned` (N, s) each sample's faces and which
+    contacts it assigns; `directions` (s, 2) the unit directions of the paths that
+    met the contacts; `fitness` (N,) from :func:`residual_fitness`.
+    """
+    fit, src = pose.fit, samples.src
+    Rs = rotation_matrices(samples.theta)
+    # weight = prior x incidence likelihood x pose volume (x Gaussian residual term)
+    world_n = np.einsum("nij,nsj->nsi", Rs, faces.normal[face])
+    incidence = np.where(assigned, np.abs(np.einsum("nsi,si->ns", world_n, directions)), 1.0).prod(
+        1
+    )
+    volume = np.sqrt(np.maximum(np.linalg.det(fit.cov), 0.0))[src]
+    family, cell, span_scale = samples.family[src], samples.cell[src], samples.span_scale[src]
+    volume = np.where(family, volume * cell * span_scale / pose.sigma_d, volume)
+    weight = prior * incidence * volume * fitness
+    weight *= config.outlier_probability ** (~assigned).sum(axis=1)
+    if config.likelihood == "gaussian":
+        weight *= np.exp(-0.5 * fit.chi2[src])
+    return weight
+
+
+def _fitness(
+    P: np.ndarray,
+    U: np.ndarray,
+    faces: Faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    eps_d: float,
+    phi: float,
+) -> np.ndarray:
+    """(K,) volume of the poses consistent with the contacts as measured, over
+    that with the same contacts moved onto the fitted pose's faces: 1 when the
+    contacts fit exactly, less as they lie nearer the edges of their bounds.
+    The bounded-error likelihood (uniform errors) is that volume; the pose's
+    Laplace volume carries the geometry, this ratio the residuals. 1 where the
+    volume is not known (exact sensing, unbounded, or empty when centred). Never
+    below `_FITNESS_FLOOR`: a weight, not a test (a pose consistent only between
+    the sampled rotations keeps a small weight; pruning is the bounds' business)."""
+    normal, offset = faces.normal[face], faces.offset[face]  # (K, s, 2), (K, s)
+    # the fitted pose's faces in the world: n_w . y = d + n_w . t
+    n_w = np.einsum("kij,ksj->ksi", rotation_matrices(theta), normal)
+    d_w = offset + np.einsum("ksi,ki->ks", n_w, t)
+    resid = np.einsum("ksi,si->ks", n_w, P) - d_w
+    centred = P[None] - resid[..., None] * n_w
+    measured = consistent_volume(P, U, normal, offset, assigned, theta, eps_d, phi)
+    ideal = consistent_volume(centred, n_w, normal, offset, assigned, theta, eps_d, phi)
+    known = np.isfinite(measured) & np.isfinite(ideal) & (ideal > 0)
+    ratio = np.clip(measured / np.where(known, ideal, 1.0), _FITNESS_FLOOR, 1.0)
+    return np.where(known, ratio, 1.0)
+
+
+def _admitted_share(
+    group: Group,
+    observations: list[Observation],
+    P: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    valid: np.ndarray,
+    eps_d: float,
+    floor: float,
+) -> np.ndarray:
+    """(K,) share of the poses spread over each row's consistent set (`theta`,
+    `t`, `valid`: (K, M), (K, M, 2), (K, M)) whose contacts lie within eps_d of
+    their FINITE faces and whose paths (up to each contact less eps_d, or whole
+    when missed) stay out of the outline: the model check without the pose's
+    error allowance. It weighs, it does not prune (at least `_FITNESS_FLOOR`;
+    1 where no pose is spread)."""
+    K, M = valid.shape
+    faces = group.stable.faces
+    R = rotation_matrices(theta.reshape(-1)).reshape(K, M, 2, 2)
+    start = np.einsum("kmij,ksj->kmsi", R, faces.start[face]) + t[:, :, None, :]
+    end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None, :]
+    dist = point_segment_distance(P[None, None], start, end)  # (K, M, s)
+    good = valid & np.all(~assigned[:, None, :] | (dist <= eps_d + floor), axis=-1)
+    clear = clear_paths(
+        group,
+        observations,
+        np.repeat(assigned, M, axis=0),
+        theta.reshape(-1),
+        t.reshape(-1, 2),
+        np.full(K * M, floor),
+        good.reshape(-1),
+        eps_d,
+        floor,
+    )
+    good = clear.reshape(K, M)
+    count = valid.sum(axis=1)
+    share = good.sum(axis=1) / np.maximum(count, 1)
+    return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
