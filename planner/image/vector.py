@@ -1,4 +1,4 @@
-"""Vector multi-interpretation image (DESIGN §4.8; thesis ch. 3 and §4.2).
+"""Vector multi-interpretation image and paths' crossings (DESIGN §4.8; thesis ch. 3 and §4.2).
 
 The MII overlays the posed outlines of every hypothesis: union area,
 intersection area (IA, inside every posed outline, maybe several components)
@@ -12,6 +12,11 @@ each posed face becomes its grown rectangle (thesis §4.2.3: widened by
 ``eps_t``, lengthened by ``eps_t / 2`` at each end, i.e. a square-capped buffer
 of ``eps_t / 2``) and blocking boundaries become regions where grown faces of
 similar normal from two or more classes overlap.
+
+The posed faces and their normal groups are in :mod:`planner.image.faces`,
+the blocking boundaries in :mod:`planner.image.blocking`; here they are
+assembled into the :class:`VectorMII`, and :func:`paths_crossings` tells which
+blocking boundaries straight paths meet (Theorems 1 and 2).
 
 All coordinates are world-frame lengths in the unit of the object files;
 angles are radians, counter-clockwise positive.
@@ -27,367 +32,20 @@ from functools import partial, reduce
 import numpy as np
 import shapely
 
-from planner.errors import InvalidModelError, PlanningNotPossibleError
+from planner.image.blocking import BlockingBoundary, blocking_boundaries
+from planner.image.faces import (
+    EXACT_TOLERANCE,
+    PosedFaces,
+    grown_faces,
+    hypothesis_weights,
+    model_map,
+    posed_faces,
+    posed_polygon,
+)
 from planner.memo import cached_property
 from planner.types import Hypothesis, ObjectModel
 
-__all__ = [
-    "BlockingBoundary",
-    "Crossings",
-    "PosedFaces",
-    "VectorMII",
-    "blocking_boundaries",
-    "build_mii",
-    "cluster_sorted",
-    "grown_faces",
-    "hypothesis_weights",
-    "model_map",
-    "normal_groups",
-    "paths_crossings",
-    "posed_faces",
-    "posed_outline",
-    "posed_polygon",
-]
-
-#: Relative tolerance (of the MII's extent) used when every error bound is zero.
-EXACT_TOLERANCE = 1e-7
-
-
-def model_map(models: Mapping[str, ObjectModel] | Iterable[ObjectModel]) -> dict[str, ObjectModel]:
-    """Models by name; accepts a mapping or any iterable of :class:`ObjectModel`."""
-    if isinstance(models, Mapping):
-        return dict(models)
-    return {m.name: m for m in models}
-
-
-def _stable_pose(h: Hypothesis, models: Mapping[str, ObjectModel]):
-    model = models.get(h.object)
-    if model is None:
-        raise InvalidModelError(f"no object model named {h.object!r}", field="models")
-    if not 0 <= h.stable_pose < len(model.stable_poses):
-        raise InvalidModelError(
-            f"object {h.object!r} has no stable pose {h.stable_pose}", field="hypotheses"
-        )
-    return model.stable_poses[h.stable_pose]
-
-
-def posed_outline(
-    h: Hypothesis, models: Mapping[str, ObjectModel]
-) -> tuple[np.ndarray, tuple[np.ndarray, ...]]:
-    """World-frame outline (N, 2) and holes of hypothesis `h`.
-
-    >>> from planner.geometry import make_stable_pose
-    >>> from planner.types import ErrorBound, Pose
-    >>> sq = ObjectModel("sq", (make_stable_pose([[0, 0], [1, 0], [1, 1], [0, 1]]),))
-    >>> h = Hypothesis("sq", 0, (), Pose(2.0, 0.0, 0.0), ErrorBound(0, 0, 0), 1.0)
-    >>> posed_outline(h, {"sq": sq})[0][0].tolist()
-    [2.0, 0.0]
-    """
-    pose = _stable_pose(h, models)
-    return h.pose.apply(pose.outline), tuple(h.pose.apply(r) for r in pose.holes)
-
-
-def posed_polygon(h: Hypothesis, models: Mapping[str, ObjectModel]) -> shapely.Polygon:
-    """The posed outline of `h` as a shapely polygon (world frame)."""
-    outline, holes = posed_outline(h, models)
-    return shapely.Polygon(outline, list(holes))
-
-
-@dataclass(frozen=True, eq=False)
-class PosedFaces:
-    """Every face of every hypothesis in the world frame, as flat arrays of length F.
-
-    `start`, `end`, `normal` (outward unit) are (F, 2); `offset` is ``n·start``;
-    `hypothesis` indexes the hypothesis list, `klass` the equivalence classes
-    (renumbered 0..C-1); `eps_t` is the owning hypothesis' error disk diameter.
-    """
-
-    start: np.ndarray
-    end: np.ndarray
-    normal: np.ndarray
-    offset: np.ndarray
-    length: np.ndarray
-    hypothesis: np.ndarray
-    klass: np.ndarray
-    eps_t: np.ndarray
-
-    def __len__(self) -> int:
-        return len(self.length)
-
-    @property
-    def angle(self) -> np.ndarray:
-        return np.arctan2(self.normal[:, 1], self.normal[:, 0])
-
-
-def hypothesis_weights(
-    hypotheses: Sequence[Hypothesis],
-) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """Normalized weights w(h), class index per hypothesis (0..C-1), class weights w(k).
-
-    Classes come from ``equivalence_class``; a class counts once with the summed
-    weight of its members.
-    """
-    if not hypotheses:
-        raise PlanningNotPossibleError("no hypotheses to build an image from", field="hypotheses")
-    p = np.array([h.probability for h in hypotheses], dtype=float)
-    if not np.all(np.isfinite(p)) or np.any(p < 0) or p.sum() <= 0:
-        raise PlanningNotPossibleError(
-            "hypothesis probabilities must be finite, >= 0 and not all zero", field="hypotheses"
-        )
-    # w(h) = p(h) / sum_g p(g)
-    weights = p / p.sum()
-    _, klass = np.unique([h.equivalence_class for h in hypotheses], return_inverse=True)
-    klass = klass.reshape(-1)
-    # w(k) = sum_{h in k} w(h)
-    class_weights = np.bincount(klass, weights=weights)
-    return weights, klass, class_weights
-
-
-def posed_faces(
-    hypotheses: Sequence[Hypothesis], models: Mapping[str, ObjectModel] | Iterable[ObjectModel]
-) -> PosedFaces:
-    """Collect the posed faces of all hypotheses (world frame, outline and holes)."""
-    models = model_map(models)
-    _, klass, _ = hypothesis_weights(hypotheses)
-    pairs = [(h, _stable_pose(h, models).faces) for h in hypotheses]
-    # v_world = R(theta) v_model + t;  n_world = R(theta) n_model
-    start = np.concatenate([h.pose.apply(f.start) for h, f in pairs])
-    end = np.concatenate([h.pose.apply(f.end) for h, f in pairs])
-    normal = np.concatenate([f.normal @ h.pose.rotation().T for h, f in pairs])
-    hyp = np.repeat(np.arange(len(hypotheses)), [len(f) for _, f in pairs])
-    eps = np.array([h.error_bound.eps_t for h in hypotheses], dtype=float)[hyp]
-    edge = end - start
-    return PosedFaces(
-        start=start,
-        end=end,
-        normal=normal,
-        offset=np.einsum("ij,ij->i", normal, start),
-        length=np.hypot(edge[:, 0], edge[:, 1]),
-        hypothesis=hyp,
-        klass=klass[hyp],
-        eps_t=np.maximum(eps, 0.0),
-    )
-
-
-def cluster_sorted(values: np.ndarray, tolerance: float, *, circular: bool = False) -> np.ndarray:
-    """Cluster 1-D values so that every cluster spans at most `tolerance`.
-
-    Values are visited in sorted order and a new cluster starts when a value lies
-    more than `tolerance` beyond the first value of the current cluster (so no
-    chaining across a fan of small steps). With `circular` the values are angles
-    in radians and the sweep starts after the widest gap, so no cluster straddles
-    the +-pi seam. Returns a cluster label per value (0..K-1).
-
-    >>> cluster_sorted(np.array([0.0, 0.05, 1.0, 0.02]), 0.1).tolist()
-    [0, 0, 1, 0]
-    """
-    values = np.asarray(values, dtype=float)
-    if values.size == 0:
-        return np.zeros(0, dtype=int)
-    order = np.argsort(values, kind="stable")
-    ordered = values[order]
-    if circular:
-        gaps = np.diff(np.append(ordered, ordered[0] + 2 * np.pi))
-        first = (int(np.argmax(gaps)) + 1) % len(ordered)
-        order = np.roll(order, -first)
-        ordered = np.unwrap(values[order])
-    labels_sorted = np.empty(len(order), dtype=int)
-    label, anchor = 0, ordered[0]
-    for k, v in enumerate(ordered):  # one pass over faces, never over pairs
-        if v - anchor > tolerance:
-            label, anchor = label + 1, v
-        labels_sorted[k] = label
-    labels = np.empty_like(labels_sorted)
-    labels[order] = labels_sorted
-    return labels
-
-
-def normal_groups(faces: PosedFaces, angle_tolerance: float) -> np.ndarray:
-    """Group faces whose outward normals agree within `angle_tolerance` (radians)."""
-    return cluster_sorted(faces.angle, angle_tolerance, circular=True)
-
-
-@dataclass(frozen=True, eq=False)
-class BlockingBoundary:
-    """A stretch of boundary shared by several equivalence classes with one normal.
-
-    `geometry` is a shapely LineString (zero error) or Polygon (grown faces),
-    world frame. `hypotheses` and `classes` index the MII's hypothesis list and
-    its classes; ``degree = len(classes) - 1``; `strength` is the summed
-    normalized weight of the classes (each class once).
-    """
-
-    geometry: shapely.Geometry
-    normal: np.ndarray
-    hypotheses: tuple[int, ...]
-    classes: tuple[int, ...]
-    degree: int
-    strength: float
-
-    @property
-    def is_region(self) -> bool:
-        return self.geometry.geom_type in ("Polygon", "MultiPolygon")
-
-
-def _boundary(
-    geometry: shapely.Geometry,
-    normal: np.ndarray,
-    hyps: np.ndarray,
-    classes: np.ndarray,
-    class_weights: np.ndarray,
-) -> BlockingBoundary:
-    # degree = |K| - 1, strength = sum_{k in K} w(k)
-    return BlockingBoundary(
-        geometry=geometry,
-        normal=np.array(normal, dtype=float),
-        hypotheses=tuple(int(h) for h in hyps),
-        classes=tuple(int(c) for c in classes),
-        degree=len(classes) - 1,
-        strength=float(class_weights[classes].sum()),
-    )
-
-
-def _segments_on_line(
-    faces: PosedFaces,
-    idx: np.ndarray,
-    class_weights: np.ndarray,
-    tol: float,
-) -> list[BlockingBoundary]:
-    """Overlap the faces `idx` (one supporting line) and emit shared stretches."""
-    n_bar = faces.normal[idx].mean(axis=0)
-    n_bar /= np.hypot(*n_bar)
-    t_bar = np.array([-n_bar[1], n_bar[0]])
-    d_bar = float(np.mean(np.concatenate([faces.start[idx], faces.end[idx]]) @ n_bar))
-    # s = t·p: position of each endpoint along the line
-    s0, s1 = faces.start[idx] @ t_bar, faces.end[idx] @ t_bar
-    lo, hi = np.minimum(s0, s1), np.maximum(s0, s1)
-    breaks = np.unique(np.concatenate([lo, hi]))
-    breaks = breaks[np.concatenate([[True], np.diff(breaks) > tol])]
-    if len(breaks) < 2:
-        return []
-    mid = 0.5 * (breaks[:-1] + breaks[1:])
-    # cover[f, e]: face f spans elementary interval e
-    cover = (lo[:, None] <= mid[None, :]) & (hi[:, None] >= mid[None, :])
-    n_classes = len(class_weights)
-    by_class = np.zeros((n_classes, len(mid)), dtype=bool)
-    np.logical_or.at(by_class, faces.klass[idx], cover)
-    shared = by_class.sum(axis=0) >= 2
-    if not shared.any():
-        return []
-    # merge neighbouring intervals with the same set of classes
-    key_change = np.any(by_class[:, 1:] != by_class[:, :-1], axis=0) | (shared[1:] != shared[:-1])
-    run_start = np.flatnonzero(np.concatenate([[True], key_change]))
-    run_end = np.append(run_start[1:], len(mid))
-    out = []
-    for a, b in zip(run_start, run_end, strict=True):
-        if not shared[a]:
-            continue
-        classes = np.flatnonzero(by_class[:, a])
-        members = idx[cover[:, a]]
-        ends = d_bar * n_bar + breaks[[a, b], None] * t_bar
-        hyps = np.unique(faces.hypothesis[members])
-        out.append(_boundary(shapely.LineString(ends), n_bar, hyps, classes, class_weights))
-    return out
-
-
-def _regions_in_group(
-    faces: PosedFaces,
-    idx: np.ndarray,
-    rects: np.ndarray,
-    class_weights: np.ndarray,
-    grid_size: float,
-) -> list[BlockingBoundary]:
-    """Overlay the grown faces `idx` (one normal group); emit cells shared by 2+ classes."""
-    tree = shapely.STRtree(rects[idx])
-    a, b = tree.query(rects[idx], predicate="intersects")
-    pairs = faces.klass[idx][a] != faces.klass[idx][b]
-    if not pairs.any():
-        return []
-    involved = idx[np.unique(np.concatenate([a[pairs], b[pairs]]))]
-    # snap-rounded noding: nearly collinear rectangle sides defeat floating-point noding
-    sub = shapely.set_precision(rects[involved], grid_size)
-    noded = shapely.union_all(shapely.boundary(sub), grid_size=grid_size)
-    cells = shapely.get_parts(shapely.polygonize(shapely.get_parts(noded)))
-    xmin, ymin, xmax, ymax = shapely.total_bounds(sub)
-    # drop slivers left by coincident rectangle sides
-    cells = cells[shapely.area(cells) > grid_size * max(xmax - xmin, ymax - ymin)]
-    if len(cells) == 0:
-        return []
-    reps = shapely.point_on_surface(cells)
-    cell_i, rect_i = shapely.STRtree(sub).query(reps, predicate="within")
-    n_classes = len(class_weights)
-    by_class = np.zeros((len(cells), n_classes), dtype=bool)
-    by_class[cell_i, faces.klass[involved][rect_i]] = True
-    by_hyp = np.zeros((len(cells), int(faces.hypothesis.max()) + 1), dtype=bool)
-    by_hyp[cell_i, faces.hypothesis[involved][rect_i]] = True
-    shared = by_class.sum(axis=1) >= 2
-    if not shared.any():
-        return []
-    keys, key_of = np.unique(by_class[shared], axis=0, return_inverse=True)
-    key_of = key_of.reshape(-1)
-    n_bar = faces.normal[involved].mean(axis=0)
-    n_bar /= np.hypot(*n_bar)
-    out: list[BlockingBoundary] = []
-    for k, key in enumerate(keys):
-        chosen = key_of == k
-        region = shapely.union_all(cells[shared][chosen])
-        hyps = np.flatnonzero(by_hyp[shared][chosen].any(axis=0))
-        classes = np.flatnonzero(key)
-        out.extend(
-            _boundary(part, n_bar, hyps, classes, class_weights)
-            for part in shapely.get_parts(region)
-        )
-    return out
-
-
-def grown_faces(faces: PosedFaces, floor: float = 0.0) -> np.ndarray:
-    """Grown rectangle of every face: square-capped buffer of ``max(eps_t, floor) / 2``."""
-    lines = shapely.linestrings(np.stack([faces.start, faces.end], axis=1))
-    # widened by eps_t, lengthened by eps_t / 2 at each end (thesis §4.2.3)
-    half = 0.5 * np.maximum(faces.eps_t, floor)
-    return shapely.buffer(lines, half, cap_style="square", join_style="mitre")
-
-
-def blocking_boundaries(
-    faces: PosedFaces,
-    class_weights: np.ndarray,
-    *,
-    angle_tolerance: float,
-    position_tolerance: float,
-    exact: bool,
-    grown: np.ndarray | None = None,
-) -> list[BlockingBoundary]:
-    """Blocking boundaries from posed faces (DESIGN §4.8).
-
-    Faces are grouped by normal within `angle_tolerance` (radians). `exact`:
-    each normal group is split by supporting line (offset within
-    `position_tolerance`) and faces are overlapped along the line, giving
-    segments. Otherwise faces are grown rectangles and the shared parts of the
-    overlay are regions (`grown`: the faces' rectangles, built when not given).
-    Sorted by decreasing strength.
-    """
-    groups = normal_groups(faces, angle_tolerance)
-    out: list[BlockingBoundary] = []
-    rects = np.empty(0, dtype=object)
-    if not exact:
-        rects = grown if grown is not None else grown_faces(faces, 2.0 * position_tolerance)
-    for g in np.unique(groups):
-        idx = np.flatnonzero(groups == g)
-        if len(np.unique(faces.klass[idx])) < 2:
-            continue
-        if exact:
-            n_bar = faces.normal[idx].mean(axis=0)
-            n_bar /= np.hypot(*n_bar)
-            mid = 0.5 * (faces.start[idx] + faces.end[idx])
-            lines = cluster_sorted(mid @ n_bar, position_tolerance)
-            for line in np.unique(lines):
-                on_line = idx[lines == line]
-                if len(np.unique(faces.klass[on_line])) >= 2:
-                    out.extend(_segments_on_line(faces, on_line, class_weights, position_tolerance))
-        else:
-            out.extend(_regions_in_group(faces, idx, rects, class_weights, position_tolerance))
-    out.sort(key=lambda b: (-b.strength, b.geometry.bounds))
-    return out
+__all__ = ["Crossings", "VectorMII", "build_mii", "paths_crossings"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -454,7 +112,7 @@ def build_mii(
     normals, twice the largest rotation error bound of the hypotheses. Blocking
     boundaries are exact segments when every ``eps_t`` is zero, else regions.
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
     >>> from planner.types import ErrorBound, Pose
     >>> sq = ObjectModel("sq", (make_stable_pose([[0, 0], [2, 0], [2, 1], [0, 1]]),))
     >>> hs = [Hypothesis("sq", 0, (), Pose(x, 0, 0), ErrorBound(0, 0, 0), 0.5,
@@ -536,7 +194,7 @@ def paths_crossings(
     With zero error, a path from outside the union into the IA with
     ``count == 0`` yields a distinguishing measurement (Theorem 1).
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
     >>> from planner.types import ErrorBound, Pose
     >>> sq = ObjectModel("sq", (make_stable_pose([[0, 0], [2, 0], [2, 1], [0, 1]]),))
     >>> hs = [Hypothesis("sq", 0, (), Pose(x, 0, 0), ErrorBound(0, 0, 0), 0.5,

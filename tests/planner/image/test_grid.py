@@ -13,8 +13,9 @@ from scipy import ndimage
 
 from planner.errors import PlanningNotPossibleError
 from planner.geometry import cast_rays
-from planner.image.grid import GridMapping, build_grid, choose, sweep_rays, thesis_paths, windows
+from planner.image.grid import GridMapping, build_grid
 from planner.image.vector import build_mii
+from planner.image.windows import choose, sweep_rays, thesis_paths, windows
 from planner.models.outlines import make_stable_pose
 from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose, Workspace
 from tests.planner.image.test_vector import (

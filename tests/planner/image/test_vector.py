@@ -18,14 +18,8 @@ from hypothesis import strategies as st
 
 from planner.errors import InvalidModelError, PlanningNotPossibleError
 from planner.geometry import cast_rays, point_segment_distance, rotation_matrix, wrap_angle
-from planner.image.vector import (
-    build_mii,
-    cluster_sorted,
-    grown_faces,
-    paths_crossings,
-    posed_faces,
-    posed_polygon,
-)
+from planner.image.faces import cluster_sorted, grown_faces, posed_faces, posed_polygon
+from planner.image.vector import build_mii, paths_crossings
 from planner.models.library import load_objects
 from planner.models.outlines import make_stable_pose
 from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose
