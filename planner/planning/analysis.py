@@ -14,7 +14,8 @@ import numpy as np
 
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.budget import Deadline
-from planner.planning.candidates import Candidates, generate_candidates
+from planner.planning.candidate_generation import generate_candidates
+from planner.planning.candidates import Candidates
 from planner.planning.config import StrategyConfig
 from planner.planning.confusability import class_bits
 from planner.planning.outcomes import Outcomes, predict_outcomes
@@ -50,10 +51,12 @@ class Analysis:
 
 
 def as_generator(rng: np.random.Generator | int | None) -> np.random.Generator:
+    """`rng` itself when it is a generator, else a generator seeded with it (None: 0)."""
     return rng if isinstance(rng, np.random.Generator) else np.random.default_rng(rng or 0)
 
 
 def models_by_name(models: Mapping[str, ObjectModel] | Sequence[ObjectModel]) -> dict:
+    """The object models keyed by name, whether given as a mapping or a sequence."""
     return dict(models) if isinstance(models, Mapping) else {m.name: m for m in models}
 
 

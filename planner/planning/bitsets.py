@@ -353,8 +353,8 @@ def undominated(bits: np.ndarray) -> np.ndarray:
     identical ones kept.
 
     Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h: whatever
-    the truth, Q leaves no more classes than Q' (:mod:`planner.planning.search` uses it for
-    one-touch values).
+    the truth, Q leaves no more classes than Q' (:mod:`planner.planning.search_nodes` uses
+    it for one-touch values).
 
     >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
     >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()

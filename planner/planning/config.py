@@ -8,7 +8,7 @@ from dataclasses import dataclass, field, fields
 from typing import Any
 
 from planner.errors import PlannerError
-from planner.planning.candidates import CandidateConfig
+from planner.planning.candidate_generation import CandidateConfig
 from planner.planning.outcomes import OutcomeConfig
 
 __all__ = ["STRATEGIES", "THESIS_CHOICES", "StrategyConfig"]

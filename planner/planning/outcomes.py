@@ -21,7 +21,8 @@ in radians (counter-clockwise positive). The pipeline is three numpy passes:
 
 Posed hypotheses live in :mod:`planner.planning.posed_set`, the casting in
 :mod:`planner.planning.casting` and candidate paths in
-:mod:`planner.planning.candidates`.
+:mod:`planner.planning.candidates` (the general set from
+:mod:`planner.planning.candidate_generation`).
 """
 
 from __future__ import annotations
@@ -162,7 +163,8 @@ def predict_outcomes(
     """Cast C paths (origins (C, 2), unit directions (C, 2), lengths (C,)) against
     every posed hypothesis, in numpy passes chunked over the paths.
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
+    >>> from planner.planning.posed_set import pose_hypotheses
     >>> from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose
     >>> square = ObjectModel("sq", (make_stable_pose([[-1, -1], [1, -1], [1, 1], [-1, 1]]),))
     >>> h = Hypothesis("sq", 0, (), Pose(0, 0, 0), ErrorBound(0, 0, 0), 1.0)

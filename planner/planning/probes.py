@@ -4,7 +4,7 @@ The opening probe before any contact (from the sensor's place toward the
 centre; ``random``: from a random place), the thesis' second probe orthogonal
 to the first contact normal (thesis §3.1, Exp. II), random draws aimed at the
 centre of the union area (thesis Exp. I), and the thesis' grid windows from
-:func:`planner.image.grid.thesis_paths`.
+:func:`planner.image.windows.thesis_paths`.
 """
 
 from __future__ import annotations
@@ -19,7 +19,8 @@ import numpy as np
 from planner.errors import PlanningNotPossibleError
 from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.models.prior import draw_poses, draw_stable_poses
-from planner.planning.candidates import Candidates, paths_through, union_centre
+from planner.planning.candidates import Candidates, paths_through
+from planner.planning.intersection_aims import union_centre
 from planner.planning.posed_set import PosedSet
 from planner.planning.result import PlannedPath, opening_path
 from planner.planning.scoring import motion_cost
@@ -232,7 +233,7 @@ def strategy_paths(
         return Candidates.empty()
     if parallel == 1:
         return _orthogonal_probe(contacts[0], posed, workspace, sensor_position)
-    from planner.image.grid import thesis_paths
+    from planner.image.windows import thesis_paths
 
     # windows in CHOOSE order: admitted blocking strength, then nearest origin
     try:

@@ -8,7 +8,6 @@ from __future__ import annotations
 import math
 from collections.abc import Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 
@@ -23,10 +22,6 @@ PLAN_STATUSES = ("awaiting_contact", "ambiguous", "localized", "inconsistent")
 REFINING = "refining"
 
 _GOLDEN_ANGLE = math.pi * (3 - math.sqrt(5))
-
-
-def _finite(x: float | None) -> float | None:
-    return None if x is None or not math.isfinite(x) else float(x)
 
 
 @dataclass(frozen=True)
@@ -70,24 +65,6 @@ class PlannedPath:
     def path(self) -> SensingPath:
         return SensingPath(self.origin, self.direction, self.length)
 
-    def as_dict(self) -> dict[str, Any]:
-        """The §6 JSON form (non-finite numbers become None)."""
-        return {
-            "origin": list(self.origin),
-            "direction": list(self.direction),
-            "length": self.length,
-            "aim": list(self.aim),
-            "family": self.family,
-            "p_distinguishing": self.p_distinguishing,
-            "p_informative": self.p_informative,
-            "expected_pruning": self.expected_pruning,
-            "expected_remaining": _finite(self.expected_remaining),
-            "motion_cost": _finite(self.motion_cost),
-            "source": self.source,
-            "expected_eps_t": _finite(self.expected_eps_t),
-            "p_forecast": _finite(self.p_forecast),
-        }
-
 
 @dataclass(frozen=True)
 class Plan:
@@ -108,20 +85,6 @@ class Plan:
     @property
     def best(self) -> PlannedPath | None:
         return self.paths[0] if self.paths else None
-
-    def as_dict(self, limit: int | None = None) -> dict[str, Any]:
-        """The §6 ``GET /v1/sessions/{id}/plan`` body (plus strategy, note, counts)."""
-        paths = self.paths if limit is None else self.paths[:limit]
-        return {
-            "status": self.status,
-            "truncated": self.truncated,
-            "elapsed_ms": self.elapsed_ms,
-            "paths": [p.as_dict() for p in paths],
-            "strategy": self.strategy,
-            "note": self.note,
-            "candidates": self.candidates,
-            "classes": self.classes,
-        }
 
 
 def opening_path(

@@ -1,15 +1,15 @@
 """Scores of candidate paths (DESIGN §4.12).
 
-Inputs are a :class:`~planner.planning.outcomes.SurvivorTable` (survivor sets over
+Inputs are a :class:`~planner.planning.bitsets.SurvivorTable` (survivor sets over
 equivalence classes, one per path and truth class, with class weights) and,
 for the motion cost, the paths' origins and expected travel. Probabilities are
 over equivalence classes; lengths are in the object files' unit.
 
 The expected number of remaining touches, E(S), and the exact ``optimal``
-dynamic programme live in :mod:`planner.planning.search` (re-exported here).
+dynamic programme live in :mod:`planner.planning.search`.
 
 >>> import numpy as np
->>> from planner.planning.outcomes import SurvivorTable
+>>> from planner.planning.bitsets import SurvivorTable
 >>> eye = np.eye(2, dtype=bool)
 >>> table = SurvivorTable.from_matrix(np.stack([eye, ~eye | eye]), np.array([0.5, 0.5]))
 >>> s = information_scores(table)
@@ -27,21 +27,15 @@ import numpy as np
 
 from planner.geometry import SHARE_SLACK, wrap_angle
 from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, weighted_count
-from planner.planning.budget import Deadline
-from planner.planning.search import SearchResult, expected_remaining, state_value
 from planner.types import Workspace
 
 __all__ = [
     "FAMILIES",
-    "Deadline",
     "InformationScores",
-    "SearchResult",
     "combined_objective",
-    "expected_remaining",
     "family_codes",
     "information_scores",
     "motion_cost",
-    "state_value",
 ]
 
 #: Path families, best first (thesis §3.1): index = family code.

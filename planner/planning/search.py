@@ -28,27 +28,24 @@ the exact dynamic programme over survivor sets (`optimal`).
 Two touches deep (the default lookahead) the root paths' children are valued
 one touch deep in large batches instead: the children of paths whose values
 lie close together are nearly all needed anyway. One-touch values take the
-minimum over the paths no other path dominates (:func:`undominated`).
+minimum over the paths no other path dominates
+(:func:`~planner.planning.bitsets.undominated`).
+
+This module holds the search itself (branch and bound, memo, the public entry
+points); expanding a state into its children, telling settled states and the
+one-touch bounds are in :mod:`planner.planning.search_nodes`.
 """
 
 from __future__ import annotations
 
 import bisect
 from dataclasses import dataclass
-from functools import cached_property
-from typing import Any
 
 import numpy as np
 
-from planner.planning.bitsets import (
-    SurvivorTable,
-    inseparable_neighbours,
-    pack_bits,
-    popcount,
-    undominated,
-    unpack_bits,
-)
+from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, unpack_bits
 from planner.planning.budget import Deadline, OutOfTimeError
+from planner.planning.search_nodes import Node, SearchSpace
 
 __all__ = ["SearchResult", "expected_remaining", "state_value"]
 
@@ -76,120 +73,17 @@ class SearchResult:
     states: int
 
 
-@dataclass(frozen=True, eq=False)
-class _Node:
-    child: np.ndarray  # (C, m, W) survivor sets S_P(h) & S
-    weight: np.ndarray  # (m,) w(h|S)
-    w_stay: np.ndarray  # (C,) weight of truths that leave S unchanged
-    open: np.ndarray  # (C, m) children that are neither S nor settled
-    bound: np.ndarray  # (C,) admissible lower bound of E_P(S); inf when uninformative
-
-
 class _Search:
+    """E(S) by branch and bound over the nodes of a :class:`SearchSpace`, memoized
+    on the state (`exact`) and on (state, depth) (`limited`), stopped by
+    `deadline`."""
+
     def __init__(self, table: SurvivorTable, deadline: Deadline) -> None:
-        self.bits = table.bits
-        self.weight = table.weight
+        self.space = SearchSpace(table)
         self.n = table.n_classes
-        self.inseparable = table.inseparable
-        self.separable = ~unpack_bits(table.inseparable, self.n)
-        self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
-        self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
-        self.near, self.near_apart = inseparable_neighbours(~self.separable)
-        self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
-        self.one_word = self.bits.shape[-1] == 1
         self.deadline = deadline
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
-        self.states = 0
-
-    @cached_property
-    def leaf(self) -> np.ndarray:
-        """The paths one touch deep values need: no other path dominates them.
-
-        If S_Q(h) is within S_Q'(h) for every h, then in any state T every member
-        Q' leaves settled Q does too and every member Q leaves with T Q' does too;
-        (1 + o) / (1 - s) grows with s and with o + s, so Q's one-touch bound
-        ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above Q''s. (Deeper
-        values need not follow: E is not monotone in the set.)"""
-        return undominated(self.bits)
-
-    @cached_property
-    def leaf_by_class(self) -> np.ndarray:
-        """(K, leaf paths, W): `by_class` on the `leaf` paths."""
-        return np.ascontiguousarray(self.by_class[:, self.leaf])
-
-    def settled(self, state: np.ndarray, idx: np.ndarray) -> bool:
-        """Can no path split the set `state` (W,) of the classes `idx`?"""
-        if len(idx) <= 1:
-            return True
-        if not self.any_inseparable or np.any(state & self.apart[idx[0]] != 0):
-            return False
-        return bool(self._clique(state[None], idx[:1])[0])
-
-    def _cliques(self, group: np.ndarray, idx: np.ndarray, size: np.ndarray) -> np.ndarray:
-        """`_clique` of the groups (..., W) of classes idx (...) of `size` (...) two or
-        more; False for the others (a group of one is settled anyway)."""
-        out = np.zeros(idx.shape, dtype=bool)
-        pick = np.nonzero(size >= 2)
-        if len(pick[0]):
-            out[pick] = self._clique(group[pick], idx[pick])
-        return out
-
-    def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
-        inseparable from idx[i], pairwise inseparable? Tested on each class's few
-        inseparable neighbours, as bit masks over them."""
-        if self.near is None or self.near_apart is None:  # too many neighbours for a word
-            member = unpack_bits(group, self.n).astype(np.float32)
-            # pairwise inseparable iff m^T A m == 0, A the separable pairs
-            return np.einsum("nj,nj->n", member @ self.separable.astype(np.float32), member) == 0
-        near, near_apart = self.near[idx], self.near_apart[idx]  # (m, G), (m, G)
-        at = np.maximum(near, 0)
-        word = np.take_along_axis(group, at // 64, axis=1)
-        inside = ((word >> (at % 64).astype(np.uint64)) & np.uint64(1)).astype(bool) & (near >= 0)
-        local = np.bitwise_or.reduce(
-            np.where(
-                inside,
-                np.left_shift(np.uint64(1), np.arange(near.shape[1], dtype=np.uint64)),
-                np.uint64(0),
-            ),
-            axis=1,
-        )
-        return ~np.any(inside & ((near_apart & local[:, None]) != 0), axis=1)
-
-    def expand(self, state: np.ndarray, idx: np.ndarray, paths: Any = slice(None)) -> _Node:
-        """The node of state S (classes idx): its children over `paths` (default all)."""
-        self.states += 1
-        w = self.weight[idx]
-        w = w / w.sum() if w.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
-        bits = self.bits[paths]
-        if self.one_word and not self.any_inseparable:
-            # fast path: one word per set; a set x is a single class iff x & (x - 1) == 0
-            word = bits[:, idx, 0] & state[0]
-            stay = word == state[0]
-            open_ = ~stay & ((word & (word - np.uint64(1))) != 0)
-            child = word[..., None]
-        else:
-            child = bits[:, idx, :] & state
-            # S_P(h) & S lies within S: it is S when it has as many members
-            count = popcount(child)
-            stay = count == len(idx)
-            settled = count <= 1
-            if self.any_inseparable:
-                # S_P(h) & S always holds the classes inseparable from h; it is settled
-                # when it holds no more (as many members) and those are pairwise inseparable
-                group = self.inseparable[idx] & state
-                size = popcount(group)
-                settled |= (count == size) & self._cliques(group, idx, size)
-            open_ = ~stay & ~settled
-        w_stay = stay.astype(float) @ w
-        informative = w_stay < 1 - 1e-12
-        bound = np.full(len(child), np.inf)
-        # E_P(S) >= (1 + sum_{open children} w(h|S) * 1) / (1 - w_stay)
-        bound[informative] = (1.0 + open_[informative].astype(float) @ w) / (
-            1.0 - w_stay[informative]
-        )
-        return _Node(child, w, w_stay, open_, bound)
 
     def value(self, state: np.ndarray, depth: int | None) -> float:
         """E(S) searched `depth` touches deep (None: exact)."""
@@ -201,21 +95,21 @@ class _Search:
         if depth is not None and (key, depth) in self.limited:
             return self.limited[key, depth]
         idx = np.flatnonzero(unpack_bits(state, self.n))
-        if self.settled(state, idx):
+        if self.space.settled(state, idx):
             self.exact[key] = 0.0
             return 0.0
         if depth == 0:
             return 1.0  # admissible leaf bound: S can be split, so at least one touch
         if depth == 1:
             # children are leaves worth 0 or 1: exact
-            best = float(self.expand(state, idx, self.leaf).bound.min())
+            best = float(self.space.expand(state, idx, self.space.leaf).bound.min())
         else:
             # E(S) = 1 + min_P sum_h w(h|S) E(S_P(h) & S), paths in order of their bound
-            node = self.expand(state, idx)
+            node = self.space.expand(state, idx)
             best = np.inf
             child_depth = None if depth is None else depth - 1
             for c in np.argsort(node.bound, kind="stable"):
-                if not node.bound[c] < best - 1e-12:
+                if _cannot_improve(node.bound[c], best):
                     break
                 v, done = self.path_value(node, int(c), child_depth, best)
                 if done and v < best:
@@ -227,7 +121,7 @@ class _Search:
         return best
 
     def path_value(
-        self, node: _Node, c: int, depth: int | None, cutoff: float
+        self, node: Node, c: int, depth: int | None, cutoff: float
     ) -> tuple[float, bool]:
         """E_P(S) for path c; stops early (returning a lower bound, False) once it
         cannot get below `cutoff`."""
@@ -247,8 +141,10 @@ class _Search:
                 # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
                 total += node.weight[k] * value
                 rest -= node.weight[k]
-                if (total + rest) / denom >= cutoff:
-                    return (total + rest) / denom, False
+                # the children not valued yet count one touch each: a lower bound
+                bound = (total + rest) / denom
+                if _reaches(bound, cutoff):
+                    return bound, False
         return total / denom, True
 
     def values_one(self, sets: np.ndarray) -> np.ndarray:
@@ -271,7 +167,7 @@ class _Search:
             # similar sizes together, each batch padded to its largest set and kept
             # within _BATCH_ELEMENTS words
             order = np.argsort(size, kind="stable")
-            budget = max(1, _BATCH_ELEMENTS // (len(self.leaf) * self.bits.shape[-1]))
+            budget = max(1, _BATCH_ELEMENTS // (len(self.space.leaf) * self.space.bits.shape[-1]))
             lo = 0
             while lo < len(order):
                 hi = lo + 1
@@ -283,8 +179,8 @@ class _Search:
                 # members of each set, padded with -1 (one row per set)
                 members = np.argsort(~unpack_bits(todo[pick], self.n), axis=1, kind="stable")
                 idx = np.where(np.arange(m) < size[pick][:, None], members[:, :m], -1)
-                settled = self._settled_many(todo[pick], idx)
-                found[pick] = np.where(settled, 0.0, self._bound_one(todo[pick], idx))
+                settled = self.space.settled_many(todo[pick], idx)
+                found[pick] = np.where(settled, 0.0, self.space.bound_one(todo[pick], idx))
                 lo = hi
             for where, v in zip(missing.values(), found, strict=True):
                 out[where] = v
@@ -296,50 +192,6 @@ class _Search:
                     self.limited[state.tobytes(), 1] = float(v)
         return out
 
-    def _settled_many(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """(n,) bool: which sets (n, W) with members idx (n, M) no path can split."""
-        single = popcount(sets) <= 1
-        if not self.any_inseparable:
-            return single
-        first = np.maximum(idx[:, 0], 0)
-        inside = ~np.any(sets & self.apart[first] != 0, axis=-1) & ~single
-        return single | self._cliques(sets, first, np.where(inside, 2, 0))
-
-    def _bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """(n,) min over paths of the one-touch bound of each set T (n, W) with
-        members idx (n, M) (-1 = padding): `expand(T).bound.min()` for a batch."""
-        self.states += len(sets)
-        real = idx >= 0
-        g = np.maximum(idx, 0)
-        w = np.where(real, self.weight[g], 0.0)
-        total = w.sum(axis=1, keepdims=True)
-        # w(h|T), uniform when T weighs nothing
-        w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
-        # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
-        rows = self.leaf_by_class[g]
-        count = popcount(np.bitwise_and(rows, sets[:, None, None, :], out=rows))
-        stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
-        settled = count <= 1
-        if self.any_inseparable:
-            # (a group of one is settled by the count already)
-            group = self.inseparable[g] & sets[:, None, :]
-            size = popcount(group)
-            pick = np.nonzero(size >= 2)
-            if len(pick[0]):
-                # some path leaves h with exactly its group: settled if that is a clique
-                only = count[pick] == size[pick][:, None]
-                some = np.flatnonzero(only.any(axis=1))
-                clique = self._clique(group[pick][some], g[pick][some])
-                at = (pick[0][some], pick[1][some])
-                settled[at] |= only[some] & clique[:, None]
-        open_ = ~stay & ~settled & real[..., None]
-        w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
-        w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
-        informative = w_stay < 1 - 1e-12
-        # E_P(T) >= (1 + sum_{open children} w(h|T)) / (1 - w_stay)
-        bound = (1.0 + w_open) / np.where(informative, 1.0 - w_stay, 1.0)
-        return np.where(informative, bound, np.inf).min(axis=1)
-
     def rank(
         self,
         state: np.ndarray,
@@ -348,19 +200,22 @@ class _Search:
         top_k: int | None,
         extra: np.ndarray,
     ) -> SearchResult:
-        n_paths = self.bits.shape[0]
+        """E_P(S) of the root `paths` from `state`, searched `depth` touches deep
+        (None: exact); with `top_k`, only the best `top_k` by ``E_P + extra`` are
+        sure to be exact, the others may keep a lower bound."""
+        n_paths = self.space.bits.shape[0]
         value = np.full(n_paths, np.inf)
         exact = np.zeros(n_paths, dtype=bool)
         idx = np.flatnonzero(unpack_bits(state, self.n))
-        if self.settled(state, idx):
+        if self.space.settled(state, idx):
             value[paths], exact[paths] = 0.0, True
-            return SearchResult(value, exact, False, self.states)
+            return SearchResult(value, exact, False, self.space.states)
         if depth == 1:
             # E_P(S) one touch deep is the bound itself: only the paths asked for
-            value[paths] = self.expand(state, idx, paths).bound
+            value[paths] = self.space.expand(state, idx, paths).bound
             exact[paths] = True
-            return SearchResult(value, exact, False, self.states)
-        node = self.expand(state, idx)
+            return SearchResult(value, exact, False, self.space.states)
+        node = self.space.expand(state, idx)
         value[paths] = node.bound[paths]
         uninformative = paths[~np.isfinite(node.bound[paths])]
         exact[uninformative] = True
@@ -369,12 +224,12 @@ class _Search:
         order = live[np.argsort(node.bound[live] + extra[live], kind="stable")]
         if child_depth == 1:
             truncated = self._rank_two(node, order, top_k, extra, value, exact)
-            return SearchResult(value, exact, truncated, self.states)
+            return SearchResult(value, exact, truncated, self.space.states)
         best: list[float] = []  # sorted exact objectives found so far
         truncated = False
         for c in order:
-            threshold = best[top_k - 1] if top_k is not None and len(best) >= top_k else np.inf
-            if node.bound[c] + extra[c] >= threshold:
+            threshold = _kth_best(best, top_k)
+            if _reaches(node.bound[c] + extra[c], threshold):
                 break
             try:
                 v, done = self.path_value(node, int(c), child_depth, threshold - extra[c])
@@ -385,11 +240,11 @@ class _Search:
             if done:
                 exact[c] = True
                 bisect.insort(best, v + extra[c])
-        return SearchResult(value, exact, truncated, self.states)
+        return SearchResult(value, exact, truncated, self.space.states)
 
     def _rank_two(
         self,
-        node: _Node,
+        node: Node,
         order: np.ndarray,
         top_k: int | None,
         extra: np.ndarray,
@@ -405,10 +260,10 @@ class _Search:
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
         while lo < len(order):
-            threshold = best[top_k - 1] if top_k is not None and len(best) >= top_k else np.inf
+            threshold = _kth_best(best, top_k)
             hi, children = lo, 0
             while hi < len(order) and (hi == lo or children < _GROUP):
-                if node.bound[order[hi]] + extra[order[hi]] >= threshold:
+                if _reaches(node.bound[order[hi]] + extra[order[hi]], threshold):
                     break
                 children += int(node.open[order[hi]].sum())
                 hi += 1
@@ -428,6 +283,24 @@ class _Search:
                 bisect.insort(best, float(v))
             lo = hi
         return False
+
+
+def _cannot_improve(bound: float, best: float) -> bool:
+    """Pruning check: paths come in order of their bound, so once a bound is not
+    below the best value found (by more than rounding) no later path improves it."""
+    return not bound < best - 1e-12
+
+
+def _reaches(bound: float, cutoff: float) -> bool:
+    """Pruning check: a lower bound at or above the cutoff (the best value found,
+    or the top_k-th best objective) rules the path out."""
+    return bound >= cutoff
+
+
+def _kth_best(best: list[float], top_k: int | None) -> float:
+    """The cutoff for entering the top `top_k`: the top_k-th of the sorted exact
+    objectives `best` found so far (inf until there are that many, or no top_k)."""
+    return best[top_k - 1] if top_k is not None and len(best) >= top_k else np.inf
 
 
 def _batches(n: int, first: int) -> list[tuple[int, int]]:
@@ -459,21 +332,20 @@ def expected_remaining(
 ) -> SearchResult:
     """Expected remaining touches E_P(S) of each root path P (this touch included).
 
-        `depth` touches are searched exactly (None: no limit, the exact DP; use
-        only for a few classes); `paths` limits the root paths scored (inner nodes
-        always use every path); with `top_k`, only the best `top_k` by
-        ``E_P + extra_cost`` are guaranteed exact and the others may keep their
-        lower bound; `deadline` stops the search (anytime: the best found so far,
-        `truncated` set); `state` is the hypothesis set S (bool over classes or a
-        bitset; default all classes).
+    `depth` touches are searched exactly (None: no limit, the exact DP; use
+    only for a few classes); `paths` limits the root paths scored (inner nodes
+    always use every path); with `top_k`, only the best `top_k` by
+    ``E_P + extra_cost`` are guaranteed exact and the others may keep their
+    lower bound; `deadline` stops the search (anytime: the best found so far,
+    `truncated` set); `state` is the hypothesis set S (bool over classes or a
+    bitset; default all classes).
 
-        >>> from planner.planning.bitsets import SurvivorTable
-    from planner.planning.budget import Deadline, OutOfTimeError
-        >>> eye = np.eye(3, dtype=bool)
-        >>> pair = eye.copy(); pair[1, 2] = pair[2, 1] = True
-        >>> table = SurvivorTable.from_matrix(np.stack([pair, eye]), np.ones(3) / 3)
-        >>> expected_remaining(table, depth=2).value.round(3).tolist()
-        [1.667, 1.0]
+    >>> from planner.planning.bitsets import SurvivorTable
+    >>> eye = np.eye(3, dtype=bool)
+    >>> pair = eye.copy(); pair[1, 2] = pair[2, 1] = True
+    >>> table = SurvivorTable.from_matrix(np.stack([pair, eye]), np.ones(3) / 3)
+    >>> expected_remaining(table, depth=2).value.round(3).tolist()
+    [1.667, 1.0]
     """
     if depth is not None and depth < 1:
         raise ValueError("depth must be >= 1 or None")

@@ -1,7 +1,7 @@
 """The planning strategies: which path to take, on the class survivor table alone (DESIGN §4.12).
 
 Strategies: ``random`` (thesis Exp. I), ``thesis`` (opening probes, then the
-grid windows of :mod:`planner.image.grid` in CHOOSE order), ``pdm`` (max P(DM)),
+grid windows of :mod:`planner.image.windows` in CHOOSE order), ``pdm`` (max P(DM)),
 ``pruning`` (max expected pruning), ``lookahead`` (min expected remaining
 touches, `depth` deep), ``optimal`` (exact DP over survivor sets for at most
 `optimal_max_classes` classes, else lookahead, saying so). None of them
@@ -103,6 +103,10 @@ def rank_candidates(
 
 @dataclass(frozen=True, eq=False)
 class _Context:
+    """What every strategy reads: the settings, the class survivor table and its
+    scores, and per candidate (C,) the motion cost, source and tier; the random
+    generator and the deadline."""
+
     config: StrategyConfig
     table: SurvivorTable
     info: InformationScores

@@ -10,6 +10,7 @@ import pytest
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from planner.codec import plan_to_dict
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import forecast_distinguishing, with_forecast
 from planner.planning.plan import plan_session
@@ -54,7 +55,7 @@ def test_plan_session_forecasts_the_first_paths_within_the_budget():
     assert len(two.paths) > 2
     assert all(p.p_forecast is not None for p in two.paths[:2])
     assert all(p.p_forecast is None for p in two.paths[2:])
-    assert two.as_dict()["paths"][0]["p_forecast"] == two.paths[0].p_forecast
+    assert plan_to_dict(two, 1)["paths"][0]["p_forecast"] == two.paths[0].p_forecast
     none = plan_session(session, SENSOR, StrategyConfig(budget_ms=None, forecast=0), 0)
     assert all(p.p_forecast is None for p in none.paths)
     assert [p.path for p in none.paths] == [p.path for p in two.paths]

@@ -30,7 +30,8 @@ from planner.planning.bitsets import (
     unpack_bits,
     weighted_count,
 )
-from planner.planning.candidates import CandidateConfig, Candidates, generate_candidates
+from planner.planning.candidate_generation import CandidateConfig, generate_candidates
+from planner.planning.candidates import Candidates
 from planner.planning.confusability import class_survivors, confusability, survivor_table
 from planner.planning.matching import SLOTS, Slots, slots_match
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes

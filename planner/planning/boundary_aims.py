@@ -1,0 +1,158 @@
+"""Aim points on faces where the hypotheses' boundaries differ (DESIGN §4.10, §4.8).
+
+A point on a posed face is blocked by every hypothesis with a face through it
+(within the pose and sensor tolerance, with the same normal); its blocking
+strength is the weight of those classes. :func:`boundary_aims` samples the faces
+and keeps the points of low strength, weakest first, one per cell of a spacing
+grid; the (point, face) pairs are found through buckets of normal angle. World
+frame, lengths in the object files' unit, angles in radians.
+"""
+
+from __future__ import annotations
+
+from typing import TYPE_CHECKING
+
+import numpy as np
+
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, wrap_angle
+from planner.planning.bitsets import sorted_count
+from planner.planning.cast_faces import segment_distance
+from planner.types import SensorBounds
+
+if TYPE_CHECKING:
+    from planner.planning.posed_set import PosedSet
+
+__all__ = ["boundary_aims"]
+
+
+def boundary_aims(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    count: int,
+    face_samples: int,
+    rng: np.random.Generator,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Up to `count` points on posed faces where the classes' boundaries differ,
+    weakest blocking first, from `face_samples` points examined per face.
+
+    Returns (points (N, 2), outward normals (N, 2)).
+    """
+    if count == 0 or face_samples == 0:
+        return np.zeros((0, 2)), np.zeros((0, 2))
+    frac = (np.arange(face_samples) + 0.5) / face_samples
+    pts = posed.start[..., None, :] + frac[:, None] * (posed.end - posed.start)[..., None, :]
+    owner = np.broadcast_to(np.arange(len(posed))[:, None, None], pts.shape[:-1])
+    keep = np.broadcast_to(posed.valid[..., None], pts.shape[:-1])
+    normals = np.broadcast_to(posed.normal[..., None, :], pts.shape)
+    pts, owner, normals = pts[keep], owner[keep], normals[keep]
+    limit = 8 * count
+    if len(pts) > limit:
+        pick = np.sort(rng.choice(len(pts), size=limit, replace=False))
+        pts, owner, normals = pts[pick], owner[pick], normals[pick]
+    shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
+    q, h = _blocking_pairs(posed, sensor, pts, owner, normals)
+    shared[q, posed.cls[h]] = True
+    strength = np.empty(len(pts))
+    chunk = max(1, 1_000_000 // max(1, posed.valid.size))
+    for lo in range(0, len(pts), chunk):
+        # blocking strength: weight of the classes with a face there
+        strength[lo : lo + chunk] = shared[lo : lo + chunk] @ posed.class_weight
+    differs = strength < 1 - SHARE_SLACK
+    pts, normals, strength = pts[differs], normals[differs], strength[differs]
+    order = rng.permutation(len(pts))
+    order = order[np.argsort(strength[order], kind="stable")]
+    # one aim per cell of a spacing grid, weakest blocking first
+    spacing = max(float(np.median(posed.length[posed.valid])) / 4, 1e-6 * posed.scale)
+    cells = np.floor(pts[order] / spacing).astype(np.int64)
+    _, first = np.unique(cells, axis=0, return_index=True)
+    chosen = order[np.sort(first)][:count]
+    return pts[chosen], normals[chosen]
+
+
+def _blocking_pairs(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    normals: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """(point, hypothesis) pairs where a face of the hypothesis blocks the point: within
+    the pose/sensor tolerance of it, with the same normal.
+
+    Faces fall into buckets of normal angle at least as wide as the widest angle
+    tolerance; in a bucket they are sorted by their extent along its direction n,
+    and a face within p of a point q spans some of [n.q - p, n.q + p]. Only the
+    faces of a point's bucket and its two neighbours that pass this are measured.
+    """
+    fh, ff = np.nonzero(posed.valid)
+    face_angle = np.arctan2(posed.normal[fh, ff, 1], posed.normal[fh, ff, 0])
+    angle = np.arctan2(normals[:, 1], normals[:, 0])
+    # turn <= n_tol + ANGLE_SLACK with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
+    widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
+    n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + SHARE_SLACK), 1e-12)))
+    if n_buckets < 3:  # some tolerance spans a third of the directions: every face
+        q = np.repeat(np.arange(len(pts)), len(fh))
+        face = np.tile(np.arange(len(fh)), len(pts))
+    else:
+        q, face = _bucket_pairs(posed, sensor, pts, owner, angle, face_angle, n_buckets)
+    # the normals first (one gather each), the distances of the pairs they leave
+    h, g = fh[face], owner[q]
+    n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
+    turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
+    keep = turn <= n_tol + ANGLE_SLACK
+    q, face, h, g = q[keep], face[keep], h[keep], g[keep]
+    p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
+    s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
+    dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
+    ok = dist <= p_tol + LENGTH_SLACK * posed.scale
+    return q[ok], h[ok]
+
+
+def _bucket_pairs(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    angle: np.ndarray,
+    face_angle: np.ndarray,
+    n_buckets: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Candidate (point, face) pairs: same or neighbouring normal-angle bucket, and
+    overlapping extents along the bucket's direction (a superset of the blocking pairs)."""
+    fh, ff = np.nonzero(posed.valid)
+    width = 2 * np.pi / n_buckets
+    bucket = np.floor((face_angle + np.pi) / width).astype(np.int64) % n_buckets
+    centre = (bucket + 0.5) * width - np.pi
+    s, e = posed.start[fh, ff], posed.end[fh, ff]
+    # extent of each face along its bucket's direction n
+    along_s = s[:, 0] * np.cos(centre) + s[:, 1] * np.sin(centre)
+    along_e = e[:, 0] * np.cos(centre) + e[:, 1] * np.sin(centre)
+    low, high = np.minimum(along_s, along_e), np.maximum(along_s, along_e)
+    used, row = np.unique(bucket, return_inverse=True)
+    span = np.zeros(len(used))
+    np.maximum.at(span, row, high - low)
+    order = np.lexsort((low, row))
+    size = np.bincount(row, minlength=len(used))
+    first = np.cumsum(size) - size
+    sorted_low = np.full((len(used), int(size.max())), np.inf)
+    rank = np.arange(len(order)) - first[row[order]]
+    sorted_low[row[order], rank] = low[order]
+    # the point's bucket and its two neighbours, where used
+    mine = np.floor((angle + np.pi) / width).astype(np.int64)
+    near = (mine[:, None] + np.array([-1, 0, 1])) % n_buckets  # (Q, 3)
+    slot = np.clip(np.searchsorted(used, near), 0, len(used) - 1)
+    ok = used[slot] == near
+    qi, k = np.nonzero(ok)
+    b = slot[qi, k]
+    n_dir = (used[b] + 0.5) * width - np.pi
+    x = pts[qi, 0] * np.cos(n_dir) + pts[qi, 1] * np.sin(n_dir)
+    # within p of the point: 2 eps_d + (eps_t(g) + eps_t(h)) / 2, at most this
+    reach = 2 * sensor.position_error + (posed.eps_t[owner[qi]] + posed.eps_t.max()) / 2
+    reach = reach + 2e-9 * posed.scale
+    lo = sorted_count(sorted_low, b, x - reach - span[b], "left")
+    hi = sorted_count(sorted_low, b, x + reach, "right")
+    count = hi - lo
+    q = np.repeat(qi, count)
+    at = np.arange(len(q)) - np.repeat(np.cumsum(count) - count, count)
+    face = order[first[np.repeat(b, count)] + np.repeat(lo, count) + at]
+    return q, face

@@ -1,0 +1,203 @@
+"""Nodes of the search over survivor sets (DESIGN §4.12): expansion, settled states, bounds.
+
+A state is a set S of equivalence classes stored as a bitset (see
+:mod:`planner.planning.bitsets`). Expanding S gives, for every path P and truth
+h in S, the child ``S_P(h) & S`` (a restriction of the survivor table computed
+once), the weights w(h|S), the weight of truths that leave S unchanged, and the
+admissible one-touch bound on the expected remaining touches::
+
+    E_P(S) >= (1 + sum_{open children} w(h|S)) / (1 - w_stay(P|S))
+
+where a child is open when it is neither S itself nor settled. A state is
+settled when no path can split it: it holds one class, or only classes that are
+pairwise inseparable. The search that walks these nodes is in
+:mod:`planner.planning.search`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from functools import cached_property
+from typing import Any
+
+import numpy as np
+
+from planner.planning.bitsets import (
+    SurvivorTable,
+    inseparable_neighbours,
+    popcount,
+    undominated,
+    unpack_bits,
+)
+
+__all__ = ["Node", "SearchSpace"]
+
+
+@dataclass(frozen=True, eq=False)
+class Node:
+    """A state S expanded over C paths; S has m member classes."""
+
+    child: np.ndarray  # (C, m, W) survivor sets S_P(h) & S
+    weight: np.ndarray  # (m,) w(h|S)
+    w_stay: np.ndarray  # (C,) weight of truths that leave S unchanged
+    open: np.ndarray  # (C, m) children that are neither S nor settled
+    bound: np.ndarray  # (C,) admissible lower bound of E_P(S); inf when uninformative
+
+
+class SearchSpace:
+    """The survivor table as the search reads it: the survivor bitsets `bits`
+    (C, K, W) and by class (K, C, W), the class weights, which classes no path
+    tells apart; `states` counts the states expanded (one-touch bounds included).
+
+    >>> from planner.planning.bitsets import SurvivorTable, pack_bits
+    >>> eye = np.eye(3, dtype=bool)
+    >>> space = SearchSpace(SurvivorTable.from_matrix(eye[None], np.ones(3) / 3))
+    >>> space.expand(pack_bits(np.ones(3, dtype=bool)), np.arange(3)).bound.tolist()
+    [1.0]
+    """
+
+    def __init__(self, table: SurvivorTable) -> None:
+        self.bits = table.bits
+        self.weight = table.weight
+        self.n = table.n_classes
+        self.inseparable = table.inseparable
+        self.separable = ~unpack_bits(table.inseparable, self.n)
+        self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
+        self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
+        self.near, self.near_apart = inseparable_neighbours(~self.separable)
+        self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
+        self.one_word = self.bits.shape[-1] == 1
+        self.states = 0
+
+    @cached_property
+    def leaf(self) -> np.ndarray:
+        """The paths one touch deep values need: no other path dominates them.
+
+        If S_Q(h) is within S_Q'(h) for every h, then in any state T every member
+        Q' leaves settled Q does too and every member Q leaves with T Q' does too;
+        (1 + o) / (1 - s) grows with s and with o + s, so Q's one-touch bound
+        ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above Q''s. (Deeper
+        values need not follow: E is not monotone in the set.)"""
+        return undominated(self.bits)
+
+    @cached_property
+    def leaf_by_class(self) -> np.ndarray:
+        """(K, leaf paths, W): `by_class` on the `leaf` paths."""
+        return np.ascontiguousarray(self.by_class[:, self.leaf])
+
+    def settled(self, state: np.ndarray, idx: np.ndarray) -> bool:
+        """Can no path split the set `state` (W,) of the classes `idx`?"""
+        if len(idx) <= 1:
+            return True
+        if not self.any_inseparable or np.any(state & self.apart[idx[0]] != 0):
+            return False
+        return bool(self._clique(state[None], idx[:1])[0])
+
+    def settled_many(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(n,) bool: which sets (n, W) with members idx (n, M) no path can split."""
+        single = popcount(sets) <= 1
+        if not self.any_inseparable:
+            return single
+        first = np.maximum(idx[:, 0], 0)
+        inside = ~np.any(sets & self.apart[first] != 0, axis=-1) & ~single
+        return single | self._cliques(sets, first, np.where(inside, 2, 0))
+
+    def _cliques(self, group: np.ndarray, idx: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """`_clique` of the groups (..., W) of classes idx (...) of `size` (...) two or
+        more; False for the others (a group of one is settled anyway)."""
+        out = np.zeros(idx.shape, dtype=bool)
+        pick = np.nonzero(size >= 2)
+        if len(pick[0]):
+            out[pick] = self._clique(group[pick], idx[pick])
+        return out
+
+    def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
+        inseparable from idx[i], pairwise inseparable? Tested on each class's few
+        inseparable neighbours, as bit masks over them."""
+        if self.near is None or self.near_apart is None:  # too many neighbours for a word
+            member = unpack_bits(group, self.n).astype(np.float32)
+            # pairwise inseparable iff m^T A m == 0, A the separable pairs
+            return np.einsum("nj,nj->n", member @ self.separable.astype(np.float32), member) == 0
+        near, near_apart = self.near[idx], self.near_apart[idx]  # (m, G), (m, G)
+        at = np.maximum(near, 0)
+        word = np.take_along_axis(group, at // 64, axis=1)
+        inside = ((word >> (at % 64).astype(np.uint64)) & np.uint64(1)).astype(bool) & (near >= 0)
+        local = np.bitwise_or.reduce(
+            np.where(
+                inside,
+                np.left_shift(np.uint64(1), np.arange(near.shape[1], dtype=np.uint64)),
+                np.uint64(0),
+            ),
+            axis=1,
+        )
+        return ~np.any(inside & ((near_apart & local[:, None]) != 0), axis=1)
+
+    def expand(self, state: np.ndarray, idx: np.ndarray, paths: Any = slice(None)) -> Node:
+        """The node of state S (classes idx): its children over `paths` (default all)."""
+        self.states += 1
+        w = self.weight[idx]
+        w = w / w.sum() if w.sum() > 0 else np.full(len(idx), 1.0 / len(idx))
+        bits = self.bits[paths]
+        if self.one_word and not self.any_inseparable:
+            # fast path: one word per set; a set x is a single class iff x & (x - 1) == 0
+            word = bits[:, idx, 0] & state[0]
+            stay = word == state[0]
+            open_ = ~stay & ((word & (word - np.uint64(1))) != 0)
+            child = word[..., None]
+        else:
+            child = bits[:, idx, :] & state
+            # S_P(h) & S lies within S: it is S when it has as many members
+            count = popcount(child)
+            stay = count == len(idx)
+            settled = count <= 1
+            if self.any_inseparable:
+                # S_P(h) & S always holds the classes inseparable from h; it is settled
+                # when it holds no more (as many members) and those are pairwise inseparable
+                group = self.inseparable[idx] & state
+                size = popcount(group)
+                settled |= (count == size) & self._cliques(group, idx, size)
+            open_ = ~stay & ~settled
+        w_stay = stay.astype(float) @ w
+        informative = w_stay < 1 - 1e-12
+        bound = np.full(len(child), np.inf)
+        # E_P(S) >= (1 + sum_{open children} w(h|S) * 1) / (1 - w_stay)
+        bound[informative] = (1.0 + open_[informative].astype(float) @ w) / (
+            1.0 - w_stay[informative]
+        )
+        return Node(child, w, w_stay, open_, bound)
+
+    def bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
+        """(n,) min over paths of the one-touch bound of each set T (n, W) with
+        members idx (n, M) (-1 = padding): `expand(T).bound.min()` for a batch."""
+        self.states += len(sets)
+        real = idx >= 0
+        g = np.maximum(idx, 0)
+        w = np.where(real, self.weight[g], 0.0)
+        total = w.sum(axis=1, keepdims=True)
+        # w(h|T), uniform when T weighs nothing
+        w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
+        # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
+        rows = self.leaf_by_class[g]
+        count = popcount(np.bitwise_and(rows, sets[:, None, None, :], out=rows))
+        stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
+        settled = count <= 1
+        if self.any_inseparable:
+            # (a group of one is settled by the count already)
+            group = self.inseparable[g] & sets[:, None, :]
+            size = popcount(group)
+            pick = np.nonzero(size >= 2)
+            if len(pick[0]):
+                # some path leaves h with exactly its group: settled if that is a clique
+                only = count[pick] == size[pick][:, None]
+                some = np.flatnonzero(only.any(axis=1))
+                clique = self._clique(group[pick][some], g[pick][some])
+                at = (pick[0][some], pick[1][some])
+                settled[at] |= only[some] & clique[:, None]
+        open_ = ~stay & ~settled & real[..., None]
+        w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
+        w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
+        informative = w_stay < 1 - 1e-12
+        # E_P(T) >= (1 + sum_{open children} w(h|T)) / (1 - w_stay)
+        bound = (1.0 + w_open) / np.where(informative, 1.0 - w_stay, 1.0)
+        return np.where(informative, bound, np.inf).min(axis=1)
