@@ -1,16 +1,18 @@
-"""JSON (DESIGN §6) <-> planner objects: observations, stored sessions, answers.
+"""Stored sessions -> planner sessions -> answer bytes.
 
->>> obs = observation_from_dict(
-...     {"path": {"origin": [0, -10], "direction": [0, 2], "length": 20}, "contact": None})
->>> observation_to_dict(obs)["path"]["direction"]
-[0.0, 1.0]
+The JSON forms themselves (observation, session, plan) are written by
+:mod:`planner.codec`; this module rebuilds planner sessions from stored records,
+checks versions (ETag, If-Match) and request identities (Idempotency-Key), and
+turns a form into the bytes of an answer (:func:`to_json`).
+
+>>> to_json({"x": 1.0, "y": float("inf")})
+b'{"x":1.0,"y":null}'
 """
 
 from __future__ import annotations
 
 import hashlib
 import json
-import math
 import uuid
 from collections.abc import Mapping
 from typing import Any
@@ -18,25 +20,14 @@ from typing import Any
 import numpy as np
 import pydantic_core
 
-from app.schemas import (
-    ErrorBoundOut,
-    HypothesisOut,
-    ObservationOut,
-    PlannedPathOut,
-    PlanOut,
-    PoseOut,
-    SensorOut,
-    SessionOut,
-    StrategyOut,
-    WorkspaceOut,
-)
 from app.store import SessionRecord
+from planner.codec import observation_from_dict, observation_to_dict, plan_to_dict, session_to_dict
 from planner.models.library import object_from_dict
 from planner.planning.config import StrategyConfig
 from planner.planning.result import Plan
-from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
-from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
+from planner.types import SensorBounds, Workspace
 
 __all__ = [
     "build_session",
@@ -46,13 +37,11 @@ __all__ = [
     "extends",
     "fingerprint",
     "if_match_ok",
-    "observation_from_dict",
-    "observation_to_dict",
-    "plan_out",
+    "plan_json",
     "plan_rng",
     "session_json",
-    "session_out",
     "strategy_config",
+    "to_json",
 ]
 
 
@@ -72,32 +61,6 @@ def fingerprint(method: str, path: str, query: str, body: Any) -> str:
     """A request's identity for Idempotency-Key: route, query and canonical JSON body."""
     text = json.dumps([method, path, query, body], sort_keys=True, separators=(",", ":"))
     return hashlib.sha256(text.encode()).hexdigest()
-
-
-def observation_from_dict(data: Mapping[str, Any]) -> Observation:
-    """The planner's observation from its §6 JSON (validated, direction normalized)."""
-    path = data["path"]
-    contact = data.get("contact")
-    return Observation(
-        SensingPath(tuple(path["origin"]), tuple(path["direction"]), float(path["length"])),
-        None
-        if contact is None
-        else Contact(tuple(contact["point"]), tuple(contact["normal"]), contact.get("normal_z")),
-    )
-
-
-def observation_to_dict(obs: Observation) -> dict[str, Any]:
-    p = obs.path
-    out: dict[str, Any] = {
-        "path": {"origin": list(p.origin), "direction": list(p.direction), "length": p.length},
-        "contact": None,
-    }
-    if obs.contact is not None:
-        c = obs.contact
-        out["contact"] = {"point": list(c.point), "normal": list(c.normal)}
-        if c.normal_z is not None:
-            out["contact"]["normal_z"] = c.normal_z
-    return out
 
 
 def build_session(record: SessionRecord) -> Session:
@@ -162,130 +125,19 @@ def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:
     )
 
 
-def _finite(x: float) -> float:
-    return float(x) if math.isfinite(x) else 0.0
-
-
-def session_out(
-    session_id: str, version: int, cfg: Mapping[str, Any], session: Session, limit: int | None
-) -> SessionOut:
-    hyps = session.hypotheses
-    shown = hyps if limit is None else hyps[:limit]
-    return SessionOut(
-        id=session_id,
-        version=version,
-        status=session.status,
-        objects=[m.name for m in session.models],
-        sensor=SensorOut(**cfg["sensor"]),
-        workspace=WorkspaceOut(**cfg["workspace"]),
-        sensor_position=cfg["sensor_position"],
-        strategy=StrategyOut(**cfg["strategy"]),
-        max_outliers=cfg["max_outliers"],
-        observations=[
-            ObservationOut(index=i, **observation_to_dict(o))
-            for i, o in enumerate(session.observations)
-        ],
-        hypotheses=[
-            HypothesisOut(
-                object=h.object,
-                stable_pose=h.stable_pose,
-                pose=PoseOut(x=h.pose.x, y=h.pose.y, theta=h.pose.theta),
-                error_bound=ErrorBoundOut(
-                    translation=_finite(h.error_bound.translation),
-                    rotation=_finite(h.error_bound.rotation),
-                    eps_t=_finite(h.error_bound.eps_t),
-                ),
-                probability=min(max(h.probability, 0.0), 1.0),
-                assignment=list(h.assignment),
-                equivalence_class=h.equivalence_class,
-            )
-            for h in shown
-        ],
-        hypothesis_count=len(hyps),
-        class_count=len({h.equivalence_class for h in hyps}),
-    )
-
-
-def _floats(values: Any) -> list[float]:
-    return [float(v) for v in values]
+def to_json(data: Any) -> bytes:
+    """Compact JSON of a JSON-ready form, non-finite floats as null (what the
+    response models' ``model_dump_json`` writes for the same values)."""
+    return pydantic_core.to_json(data, inf_nan_mode="null")
 
 
 def session_json(
     session_id: str, version: int, cfg: Mapping[str, Any], session: Session, limit: int | None
 ) -> bytes:
-    """``session_out(...).model_dump_json()``, byte for byte, without building and
-    validating one pydantic model per hypothesis and observation (the answer to
-    every observation; a test holds the two equal)."""
-    hyps = session.hypotheses
-    shown = hyps if limit is None else hyps[:limit]
-    s, ws, st = cfg["sensor"], cfg["workspace"], cfg["strategy"]
-    observations = []
-    for i, o in enumerate(session.observations):
-        p, c = o.path, o.contact
-        contact = None
-        if c is not None:
-            z = None if c.normal_z is None else float(c.normal_z)
-            contact = {"point": _floats(c.point), "normal": _floats(c.normal), "normal_z": z}
-        path = {"origin": _floats(p.origin), "direction": _floats(p.direction)}
-        observations.append(
-            {"index": i, "path": {**path, "length": float(p.length)}, "contact": contact}
-        )
-    data = {
-        "id": session_id,
-        "version": int(version),
-        "status": session.status,
-        "objects": [m.name for m in session.models],
-        "sensor": {
-            "position_error": float(s["position_error"]),
-            "normal_error": float(s["normal_error"]),
-        },
-        "workspace": {"center": _floats(ws["center"]), "radius": float(ws["radius"])},
-        "sensor_position": _floats(cfg["sensor_position"]),
-        "strategy": {
-            "name": str(st["name"]),
-            "depth": int(st["depth"]),
-            "budget_ms": float(st["budget_ms"]),
-            "max_paths": int(st["max_paths"]),
-            "motion_weight": float(st["motion_weight"]),
-            "grid_size": int(st["grid_size"]),
-            "forecast": int(st.get("forecast", 1)),
-            "seed": None if st.get("seed") is None else int(st["seed"]),
-        },
-        "max_outliers": int(cfg["max_outliers"]),
-        "observations": observations,
-        "hypotheses": [
-            {
-                "object": h.object,
-                "stable_pose": int(h.stable_pose),
-                "pose": {"x": float(h.pose.x), "y": float(h.pose.y), "theta": float(h.pose.theta)},
-                "error_bound": {
-                    "translation": _finite(h.error_bound.translation),
-                    "rotation": _finite(h.error_bound.rotation),
-                    "eps_t": _finite(h.error_bound.eps_t),
-                },
-                "probability": min(max(float(h.probability), 0.0), 1.0),
-                "assignment": [None if f is None else int(f) for f in h.assignment],
-                "equivalence_class": int(h.equivalence_class),
-            }
-            for h in shown
-        ],
-        "hypothesis_count": len(hyps),
-        "class_count": len({h.equivalence_class for h in hyps}),
-    }
-    # inf/nan as null: what pydantic's model_dump_json writes
-    return pydantic_core.to_json(data, inf_nan_mode="null")
+    """The session answer's bytes (:func:`planner.codec.session_to_dict`)."""
+    return to_json(session_to_dict(session_id, version, cfg, session, limit))
 
 
-def plan_out(result: Plan, version: int, limit: int) -> PlanOut:
-    data = result.as_dict(limit=limit)
-    return PlanOut(
-        status=data["status"],
-        truncated=data["truncated"],
-        elapsed_ms=data["elapsed_ms"],
-        paths=[PlannedPathOut(**p) for p in data["paths"]],
-        strategy=data.get("strategy", ""),
-        note=data.get("note"),
-        candidates=data.get("candidates", 0),
-        classes=data.get("classes", 0),
-        version=version,
-    )
+def plan_json(result: Plan, version: int, limit: int | None) -> bytes:
+    """The plan answer's bytes (:func:`planner.codec.plan_to_dict`)."""
+    return to_json(plan_to_dict(result, version, limit))

@@ -246,8 +246,19 @@ def _object_or_name(value: Any) -> str:
     return "object-name" if isinstance(value, str) else "inline-object"
 
 
-def input_models(settings: Settings) -> InputModels:
-    """Build the request models with the limits of `settings`."""
+@dataclass(frozen=True)
+class _Shapes:
+    """The constrained field types of one app's request models."""
+
+    Vec2: Any
+    Ring: Any
+    Holes: Any
+    NormalZ: Any
+    Name: Any
+    Length: Any
+
+
+def _shapes(settings: Settings) -> _Shapes:
     big = settings.max_coordinate
     Coord = Annotated[float, Field(ge=-big, le=big, allow_inf_nan=False)]
     Vec2 = Annotated[list[Coord], Field(min_length=2, max_length=2, description="[x, y]")]
@@ -255,28 +266,35 @@ def input_models(settings: Settings) -> InputModels:
         list[Vec2],
         Field(min_length=3, max_length=settings.max_outline_vertices, description="vertices"),
     ]
-    Holes = Annotated[list[Ring], Field(max_length=settings.max_holes)]
-    NormalZ = Annotated[
-        list[Annotated[float, Field(ge=-1, le=1)]],
-        Field(max_length=settings.max_outline_vertices * (1 + settings.max_holes)),
-    ]
-    Name = Annotated[str, Field(min_length=1, max_length=200, pattern=NAME_PATTERN)]
+    return _Shapes(
+        Vec2=Vec2,
+        Ring=Ring,
+        Holes=Annotated[list[Ring], Field(max_length=settings.max_holes)],
+        NormalZ=Annotated[
+            list[Annotated[float, Field(ge=-1, le=1)]],
+            Field(max_length=settings.max_outline_vertices * (1 + settings.max_holes)),
+        ],
+        Name=Annotated[str, Field(min_length=1, max_length=200, pattern=NAME_PATTERN)],
+        Length=Annotated[float, Field(gt=0, le=4 * big, allow_inf_nan=False)],
+    )
 
+
+def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
     class StablePoseIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="StablePoseIn")
-        outline: Ring
-        holes: Holes = Field(default_factory=list)
+        outline: t.Ring
+        holes: t.Holes = Field(default_factory=list)
         probability: Annotated[float, Field(gt=0, le=1)] = 1.0
-        normal_z: NormalZ | None = None
+        normal_z: t.NormalZ | None = None
 
     class ObjectIn(BaseModel):
         """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
 
         model_config = ConfigDict(extra="forbid", title="ObjectIn")
-        name: Name
-        outline: Ring | None = None
-        holes: Holes | None = None
-        normal_z: NormalZ | None = None
+        name: t.Name
+        outline: t.Ring | None = None
+        holes: t.Holes | None = None
+        normal_z: t.NormalZ | None = None
         stable_poses: (
             Annotated[list[StablePoseIn], Field(min_length=1, max_length=settings.max_stable_poses)]
             | None
@@ -288,20 +306,10 @@ def input_models(settings: Settings) -> InputModels:
         def as_dict(self) -> dict[str, Any]:
             return self.model_dump(exclude_none=True)
 
-    class SensorIn(BaseModel):
-        """Bounded sensor errors: contact position (length) and normal angle (radians)."""
+    return ObjectIn
 
-        model_config = ConfigDict(extra="forbid", title="SensorIn")
-        position_error: Annotated[float, Field(ge=0, le=big)] = 0.0
-        normal_error: Annotated[float, Field(ge=0, lt=MAX_NORMAL_ERROR)] = 0.0
 
-    class WorkspaceIn(BaseModel):
-        """The safe circle: known to contain the object; paths start on it."""
-
-        model_config = ConfigDict(extra="forbid", title="WorkspaceIn")
-        center: Vec2 = Field(default_factory=lambda: [0.0, 0.0])
-        radius: Annotated[float, Field(gt=0, le=big)] = 200.0
-
+def _strategy_in(settings: Settings) -> type[BaseModel]:
     class StrategyIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="StrategyIn")
         name: StrategyName = settings.default_strategy  # type: ignore[assignment]
@@ -329,8 +337,30 @@ def input_models(settings: Settings) -> InputModels:
             ),
         )
 
+    return StrategyIn
+
+
+def _session_create(
+    settings: Settings, t: _Shapes, ObjectIn: type[BaseModel], StrategyIn: type[BaseModel]
+) -> type[BaseModel]:
+    big = settings.max_coordinate
+
+    class SensorIn(BaseModel):
+        """Bounded sensor errors: contact position (length) and normal angle (radians)."""
+
+        model_config = ConfigDict(extra="forbid", title="SensorIn")
+        position_error: Annotated[float, Field(ge=0, le=big)] = 0.0
+        normal_error: Annotated[float, Field(ge=0, lt=MAX_NORMAL_ERROR)] = 0.0
+
+    class WorkspaceIn(BaseModel):
+        """The safe circle: known to contain the object; paths start on it."""
+
+        model_config = ConfigDict(extra="forbid", title="WorkspaceIn")
+        center: t.Vec2 = Field(default_factory=lambda: [0.0, 0.0])
+        radius: Annotated[float, Field(gt=0, le=big)] = 200.0
+
     ObjectRef = Annotated[
-        Annotated[Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],
+        Annotated[t.Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],
         Discriminator(_object_or_name),
     ]
 
@@ -344,24 +374,26 @@ def input_models(settings: Settings) -> InputModels:
         ]
         sensor: SensorIn = Field(default_factory=SensorIn)
         workspace: WorkspaceIn = Field(default_factory=WorkspaceIn)
-        sensor_position: Vec2 | None = Field(
+        sensor_position: t.Vec2 | None = Field(
             None, description="default: the point of the safe circle on its +x axis"
         )
         strategy: StrategyIn = Field(default_factory=StrategyIn)
         max_outliers: Annotated[int, Field(ge=0, le=settings.max_outliers)] = 0
 
-    Length = Annotated[float, Field(gt=0, le=4 * big, allow_inf_nan=False)]
+    return SessionCreate
 
+
+def _observation_in(t: _Shapes) -> type[BaseModel]:
     class PathIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="PathIn")
-        origin: Vec2
-        direction: Vec2 = Field(description="non-zero; normalized by the service")
-        length: Length
+        origin: t.Vec2
+        direction: t.Vec2 = Field(description="non-zero; normalized by the service")
+        length: t.Length
 
     class ContactIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="ContactIn")
-        point: Vec2
-        normal: Vec2 = Field(description="measured outward normal; non-zero")
+        point: t.Vec2
+        normal: t.Vec2 = Field(description="measured outward normal; non-zero")
         normal_z: Annotated[float, Field(ge=-1, le=1)] | None = None
 
     class ObservationIn(BaseModel):
@@ -371,4 +403,14 @@ def input_models(settings: Settings) -> InputModels:
         path: PathIn
         contact: ContactIn | None = None
 
-    return InputModels(ObjectIn=ObjectIn, SessionCreate=SessionCreate, ObservationIn=ObservationIn)
+    return ObservationIn
+
+
+def input_models(settings: Settings) -> InputModels:
+    """Build the request models with the limits of `settings`."""
+    t = _shapes(settings)
+    ObjectIn = _object_in(settings, t)
+    SessionCreate = _session_create(settings, t, ObjectIn, _strategy_in(settings))
+    return InputModels(
+        ObjectIn=ObjectIn, SessionCreate=SessionCreate, ObservationIn=_observation_in(t)
+    )

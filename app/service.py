@@ -20,7 +20,6 @@ and decides where work runs:
 from __future__ import annotations
 
 import json
-import threading
 import uuid
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
@@ -29,7 +28,6 @@ from typing import Any, TypeVar
 
 import anyio
 import anyio.to_thread
-from pydantic import BaseModel
 
 from app.cache import LRU, KeyedLocks
 from app.convert import (
@@ -39,9 +37,7 @@ from app.convert import (
     etag,
     extends,
     if_match_ok,
-    observation_from_dict,
-    observation_to_dict,
-    plan_out,
+    plan_json,
     plan_rng,
     session_json,
     strategy_config,
@@ -50,11 +46,11 @@ from app.errors import (
     ConflictError,
     IdempotencyInFlightError,
     IdempotencyMismatchError,
-    InvalidInputError,
     LimitExceededError,
     NotFoundError,
     PreconditionFailedError,
 )
+from app.session_config import resolve_models, session_config
 from app.settings import Settings
 from app.store import (
     IdempotentWrite,
@@ -64,12 +60,12 @@ from app.store import (
     StoredResponse,
     VersionConflictError,
 )
+from planner.codec import observation_from_dict, observation_to_dict
 from planner.errors import PlannerError
 from planner.models.library import object_from_dict, object_to_dict
 from planner.planning.plan import plan_session
 from planner.planning.result import Plan
 from planner.recognition.session import Session
-from planner.types import ObjectModel, SensorBounds, Workspace
 
 __all__ = ["Answer", "SessionService"]
 
@@ -86,10 +82,6 @@ class Answer:
     body: bytes
     headers: dict[str, str]
     replayed: bool = False
-
-
-def _json(model: BaseModel) -> bytes:
-    return model.model_dump_json().encode()
 
 
 def _next_state(
@@ -117,7 +109,6 @@ class SessionService:
         self.plans: LRU[tuple[Any, ...], Plan] = LRU(settings.plan_cache_size)
         self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
         self._in_flight: set[tuple[str, str]] = set()
-        self._render_lock = threading.Lock()  # matplotlib: one figure drawn at a time
 
     # -- running work off the event loop ----------------------------------------------------
     async def run_cpu(self, fn: Callable[..., _T], *args: Any) -> _T:
@@ -213,32 +204,6 @@ class SessionService:
         names = [r for r in refs if isinstance(r, str)]
         return await self.run_db(self.store.get_objects, names) if names else {}
 
-    @staticmethod
-    def _build_models(
-        refs: Sequence[str | dict[str, Any]], stored: dict[str, Any]
-    ) -> list[ObjectModel]:
-        models = []
-        for i, ref in enumerate(refs):
-            if isinstance(ref, str):
-                if ref not in stored:
-                    raise InvalidInputError(
-                        f"no registered object named {ref!r}; register it with "
-                        "POST /v1/objects or give it inline",
-                        field=f"objects[{i}]",
-                    )
-                models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
-            else:
-                models.append(object_from_dict(ref, field=f"objects[{i}]"))
-        seen: dict[str, int] = {}
-        for i, m in enumerate(models):
-            if m.name in seen:
-                raise InvalidInputError(
-                    f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
-                    field=f"objects[{i}]",
-                )
-            seen[m.name] = i
-        return models
-
     async def create_session(
         self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None
     ) -> Answer:
@@ -250,26 +215,7 @@ class SessionService:
 
             def prepare() -> tuple[SessionRecord, Session, bytes]:
                 # one trip to the CPU workers: under load each trip waits behind plans
-                models = self._build_models(body["objects"], stored)
-                ws = body["workspace"]
-                workspace = Workspace(tuple(ws["center"]), ws["radius"])
-                sensor = SensorBounds(**body["sensor"])
-                position = body.get("sensor_position") or [
-                    workspace.center[0] + workspace.radius,
-                    workspace.center[1],
-                ]
-                cfg = {
-                    "objects": [object_to_dict(m) for m in models],
-                    "sensor": {
-                        "position_error": sensor.position_error,
-                        "normal_error": sensor.normal_error,
-                    },
-                    "workspace": {"center": list(workspace.center), "radius": workspace.radius},
-                    "sensor_position": [float(v) for v in position],
-                    "strategy": dict(body["strategy"]),
-                    "max_outliers": body["max_outliers"],
-                }
-                strategy_config(cfg)  # the planner's own checks
+                cfg = session_config(body, resolve_models(body["objects"], stored))
                 record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
                 session = derive(build_session(record))
                 return record, session, session_json(record.id, 1, cfg, session, limit)
@@ -449,8 +395,8 @@ class SessionService:
             record = await self._record(session_id)
             session = await self._session(record)
             result = await self._plan(record, session, position)
-        out = plan_out(result, record.version, limit)
-        return Answer(200, _json(out), {"ETag": etag(record.version)})
+        body = plan_json(result, record.version, limit)
+        return Answer(200, body, {"ETag": etag(record.version)})
 
     async def picture(self, session_id: str, kind: str, view: str, dpi: int) -> Answer:
         async with self.locks.hold(session_id):
@@ -480,30 +426,20 @@ class SessionService:
                 self.pictures.put(key, body)
         return Answer(200, body, {"ETag": etag(record.version)})
 
+    @staticmethod
     def _draw(
-        self, session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
+        session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
     ) -> bytes:
-        from planner.image.grid import build_grid
-        from planner.image.vector import build_mii
-        from planner.render import render_png, render_svg
+        from planner.render import session_picture
 
-        hyps = session.hypotheses
         cfg = record.config
-        mii = build_mii(hyps, session.models) if view in ("vector", "both") else None
-        grid = (
-            build_grid(hyps, session.models, cfg["strategy"]["grid_size"])
-            if view in ("grid", "both")
-            else None
+        return session_picture(
+            session,
+            cfg["sensor_position"],
+            result,
+            fmt=kind,
+            view=view,
+            grid_size=cfg["strategy"]["grid_size"],
+            title=f"session {record.id[:8]} v{record.version}: {session.status}",
+            dpi=dpi,
         )
-        kwargs: dict[str, Any] = {
-            "contacts": session.observations,
-            "workspace": session.workspace,
-            "sensor_position": cfg["sensor_position"],
-            "paths": [p.path for p in result.paths],
-            "p_distinguishing": [p.p_distinguishing for p in result.paths],
-            "title": f"session {record.id[:8]} v{record.version}: {session.status}",
-        }
-        with self._render_lock:
-            if kind == "svg":
-                return render_svg(mii, grid, **kwargs)
-            return render_png(mii, grid, dpi=dpi, **kwargs)

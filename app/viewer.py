@@ -7,6 +7,7 @@ from typing import Any
 
 import shapely
 
+from planner.codec import contact_to_dict, path_to_dict, workspace_to_dict
 from planner.recognition.session import Session
 
 __all__ = ["VIEW_HTML", "mii_json"]
@@ -35,20 +36,13 @@ def mii_json(session: Session, sensor_position: list[float]) -> dict[str, Any]:
     hyps = session.hypotheses
     out: dict[str, Any] = {
         "status": session.status,
-        "workspace": {"center": list(session.workspace.center), "radius": session.workspace.radius},
+        "workspace": workspace_to_dict(session.workspace),
         "sensor_position": list(sensor_position),
         "outlines": [],
         "intersection": [],
         "blocking": [],
         "observations": [
-            {
-                "origin": list(o.path.origin),
-                "direction": list(o.path.direction),
-                "length": o.path.length,
-                "contact": None
-                if o.contact is None
-                else {"point": list(o.contact.point), "normal": list(o.contact.normal)},
-            }
+            {**path_to_dict(o.path), "contact": contact_to_dict(o.contact, normal_z="omit")}
             for o in session.observations
         ],
     }

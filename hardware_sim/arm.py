@@ -37,7 +37,6 @@ from __future__ import annotations
 
 import math
 from dataclasses import dataclass
-from typing import TYPE_CHECKING
 
 import numpy as np
 
@@ -46,9 +45,6 @@ from hardware_sim.sensor import ForceSensor, Press
 from hardware_sim.world import World
 from planner.geometry import LENGTH_SLACK
 from planner.types import Contact, Observation, SensingPath
-
-if TYPE_CHECKING:
-    from hardware_sim.presets import Preset
 
 __all__ = ["ArmParams", "SimulatedArm", "slide_off_vertex"]
 
@@ -175,16 +171,6 @@ class SimulatedArm:
         self._thermal_sign = float(rng.choice([-1.0, 1.0]))
         # after the first zero the routine keeps the sensor calibrated
         self.sensor.zero()
-
-    @classmethod
-    def from_preset(
-        cls, world: World, preset: str | Preset, seed: int | np.random.SeedSequence = 0
-    ) -> SimulatedArm:
-        """An arm and sensor built from a preset (a preset name, or a
-        :class:`hardware_sim.presets.Preset`), seeded."""
-        from hardware_sim.presets import build_arm
-
-        return build_arm(world, preset, seed)
 
     # -- state --------------------------------------------------------------------
     @property

@@ -35,7 +35,7 @@ import numpy as np
 from hardware_sim.protocol import Probe
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
-from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
 from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
 

@@ -34,7 +34,7 @@ from hardware_sim.client import InProcessService, outline_distance, run_recognit
 from hardware_sim.presets import PRESETS, Preset, build_arm
 from hardware_sim.world import PLACEMENTS, random_world
 from planner.planning.config import STRATEGIES, StrategyConfig
-from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.config import RecognitionConfig
 from planner.types import ObjectModel, Workspace
 
 __all__ = ["ExperimentSpec", "TrialResult", "run_experiment", "run_trial"]

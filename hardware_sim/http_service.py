@@ -53,6 +53,7 @@ from hardware_sim.api_client.models import (
 )
 from hardware_sim.api_client.types import UNSET, Response, Unset
 from hardware_sim.client import Advice, Estimate, Update
+from planner.codec import observation_to_dict, sensor_to_dict, workspace_to_dict
 from planner.models.library import object_to_dict
 from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
 
@@ -213,11 +214,8 @@ class HttpService:
         ]
         body: dict[str, Any] = {
             "objects": refs,
-            "sensor": {
-                "position_error": bounds.position_error,
-                "normal_error": bounds.normal_error,
-            },
-            "workspace": {"center": list(workspace.center), "radius": workspace.radius},
+            "sensor": sensor_to_dict(bounds),
+            "workspace": workspace_to_dict(workspace),
             "strategy": _strategy(strategy),
             "max_outliers": max_outliers,
         }
@@ -314,15 +312,7 @@ class HttpService:
     def observe(self, observation: Observation) -> Update:
         """``POST .../observations`` (``If-Match`` the held version, a new
         ``Idempotency-Key``); answers once the observation is stored durably."""
-        p, c = observation.path, observation.contact
-        body: dict[str, Any] = {
-            "path": {"origin": list(p.origin), "direction": list(p.direction), "length": p.length},
-            "contact": None,
-        }
-        if c is not None:
-            body["contact"] = {"point": list(c.point), "normal": list(c.normal)}
-            if c.normal_z is not None:
-                body["contact"]["normal_z"] = c.normal_z
+        body = observation_to_dict(observation)
         key = str(uuid.uuid4())
         held = f'"{self.version}"'
         state: SessionOut = self._send(

@@ -4,12 +4,10 @@ from __future__ import annotations
 
 import math
 
-from planner.image.grid import build_grid
-from planner.image.vector import build_mii
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan
 from planner.recognition.session import Session
-from planner.render import render_png, render_svg
+from planner.render import session_picture as draw_session
 from planner.types import Contact, ObjectModel, Observation, SensingPath, SensorBounds, Workspace
 
 __all__ = ["bump_block_pair", "session_picture"]
@@ -23,31 +21,28 @@ def session_picture(
     grid_size: int = 70,
     paths: int = 3,
 ) -> bytes:
-    """The vector and grid MII of a session with its best planned paths labelled by P(DM)."""
-    models = session.models_by_name
-    hyps = session.hypotheses
+    """The vector and grid MII of a session with its best planned paths (`strategy`,
+    5 s budget, seeded) labelled by P(DM) (:func:`planner.render.session_picture`)."""
     ranked = plan(
-        hyps,
-        models,
+        session.hypotheses,
+        session.models_by_name,
         session.sensor,
         session.workspace,
         sensor_position,
         StrategyConfig(name=strategy, budget_ms=5000),
         rng=0,
         observations=session.observations,
-    ).paths[:paths]
-    mii = build_mii(hyps, models)
-    grid = build_grid(hyps, models, grid_size)
-    render = render_png if fmt == "png" else render_svg
-    return render(
-        mii,
-        grid,
-        contacts=list(session.observations),
-        workspace=session.workspace,
-        sensor_position=sensor_position,
-        paths=[p.path for p in ranked],
-        p_distinguishing=[p.p_distinguishing for p in ranked],
-        title=f"{len(hyps)} hypotheses after {len(session.observations)} touches ({strategy})",
+    )
+    n = len(session.hypotheses)
+    return draw_session(
+        session,
+        sensor_position,
+        ranked,
+        fmt="png" if fmt == "png" else "svg",
+        view="both",
+        grid_size=grid_size,
+        paths=paths,
+        title=f"{n} hypotheses after {len(session.observations)} touches ({strategy})",
     )
 
 

@@ -11,14 +11,14 @@ Implementations: :class:`hardware_sim.arm.SimulatedArm` (arm + strain-gauge
 sensor on top of :class:`hardware_sim.world.World`). A real robot driver would
 implement the same two members.
 
->>> from hardware_sim.arm import SimulatedArm
+>>> from hardware_sim.presets import build_arm
 >>> from hardware_sim.world import World
 >>> from planner.models.library import object_from_dict
 >>> from planner.types import Pose, SensingPath, Workspace
 >>> outline = [[-10, -10], [10, -10], [10, 10], [-10, 10]]
 >>> square = object_from_dict({"name": "sq", "outline": outline})
 >>> world = World(square, 0, Pose(0.0, 0.0, 0.0), Workspace((0, 0), 100))
->>> probe: Probe = SimulatedArm.from_preset(world, "ideal", seed=0)
+>>> probe: Probe = build_arm(world, "ideal", seed=0)
 >>> result = probe.execute(SensingPath((100.0, 0.0), (-1.0, 0.0), 200.0))
 >>> result.observation.contact.point, result.observation.contact.normal
 ((10.0, 0.0), (1.0, 0.0))

@@ -5,6 +5,11 @@ Matplotlib is imported lazily inside the functions and only through
 state and no display). Nothing is written to disk: the functions return bytes
 and the caller stores or serves them.
 
+:func:`session_picture` draws a session (its MII, contacts and planned paths)
+for the service's ``image.svg``/``image.png`` and for the simulator's pictures.
+One figure is drawn at a time (matplotlib's rc parameters are process-global),
+so the functions may be called from several threads.
+
 Every artist carries a ``gid`` that becomes an element id in the SVG:
 ``outline-<i>``, ``ia-<k>``, ``blocking-<k>``, ``contact-<j>``,
 ``safe-circle``, ``sensor``, ``path-<rank>`` (and ``path-<rank>-label``),
@@ -15,22 +20,37 @@ the grid view when both views are drawn.
 from __future__ import annotations
 
 import io
+import threading
 from collections.abc import Sequence
-from typing import TYPE_CHECKING, Any
+from typing import TYPE_CHECKING, Any, Literal
 
 import numpy as np
 import shapely
 
 from planner.geometry import LENGTH_SLACK
-from planner.image.grid import GridMII, ThesisPath
-from planner.image.vector import VectorMII
+from planner.image.grid import GridMII, build_grid
+from planner.image.vector import VectorMII, build_mii
+from planner.image.windows import ThesisPath
 from planner.types import Contact, Observation, SensingPath, Workspace
 
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
     from matplotlib.figure import Figure
 
-__all__ = ["draw_grid", "draw_mii", "draw_overlays", "render_png", "render_svg"]
+    from planner.planning.result import Plan
+    from planner.recognition.session import Session
+
+__all__ = [
+    "draw_grid",
+    "draw_mii",
+    "draw_overlays",
+    "render_png",
+    "render_svg",
+    "session_picture",
+]
+
+#: Held while a figure is drawn and saved: rc parameters are global to matplotlib.
+_DRAWING = threading.Lock()
 
 _IA_COLOUR = "#7fc97f"
 _STRENGTH_CMAP = "Reds"
@@ -355,7 +375,7 @@ def render_svg(
     path (or None) for its label. Text stays text (``svg.fonttype = none``) and
     ids are stable, so the output is deterministic for a given input.
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
     >>> from planner.image.vector import build_mii
     >>> from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose
     >>> sq = ObjectModel("sq", (make_stable_pose([[0, 0], [2, 0], [2, 1], [0, 1]]),))
@@ -366,20 +386,21 @@ def render_svg(
     """
     from matplotlib import rc_context
 
-    fig = _figure(
-        mii,
-        grid,
-        contacts=contacts,
-        workspace=workspace,
-        sensor_position=sensor_position,
-        paths=paths,
-        p_distinguishing=p_distinguishing,
-        title=title,
-        panel_inches=panel_inches,
-    )
     buf = io.BytesIO()
-    with rc_context({"svg.hashsalt": "tactile-planner", "svg.fonttype": "none"}):
-        fig.savefig(buf, format="svg", metadata={"Date": None})
+    with _DRAWING:
+        fig = _figure(
+            mii,
+            grid,
+            contacts=contacts,
+            workspace=workspace,
+            sensor_position=sensor_position,
+            paths=paths,
+            p_distinguishing=p_distinguishing,
+            title=title,
+            panel_inches=panel_inches,
+        )
+        with rc_context({"svg.hashsalt": "tactile-planner", "svg.fonttype": "none"}):
+            fig.savefig(buf, format="svg", metadata={"Date": None})
     return buf.getvalue()
 
 
@@ -397,17 +418,62 @@ def render_png(
     dpi: int = 100,
 ) -> bytes:
     """PNG of the same picture as :func:`render_svg`, `dpi` pixels per inch."""
-    fig = _figure(
-        mii,
-        grid,
-        contacts=contacts,
-        workspace=workspace,
-        sensor_position=sensor_position,
-        paths=paths,
-        p_distinguishing=p_distinguishing,
-        title=title,
-        panel_inches=panel_inches,
-    )
     buf = io.BytesIO()
-    fig.savefig(buf, format="png", dpi=dpi)
+    with _DRAWING:
+        fig = _figure(
+            mii,
+            grid,
+            contacts=contacts,
+            workspace=workspace,
+            sensor_position=sensor_position,
+            paths=paths,
+            p_distinguishing=p_distinguishing,
+            title=title,
+            panel_inches=panel_inches,
+        )
+        fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()
+
+
+def session_picture(
+    session: Session,
+    sensor_position: Sequence[float],
+    plan: Plan | None = None,
+    *,
+    fmt: Literal["svg", "png"] = "png",
+    view: Literal["vector", "grid", "both"] = "both",
+    grid_size: int = 70,
+    paths: int | None = None,
+    title: str | None = None,
+    dpi: int = 100,
+) -> bytes:
+    """SVG or PNG (`fmt`) of a session: its vector MII, grid MII (`grid_size`
+    cells a side) or both (`view`), with the contacts and their normals, the safe
+    circle, the sensor at `sensor_position` (world frame) and the first `paths`
+    ranked paths of `plan` (None: all; no plan: none) labelled with their P(DM).
+    A session without hypotheses has no MII to draw
+    (:class:`~planner.errors.PlanningNotPossibleError`).
+
+    >>> from planner.models.library import object_from_dict
+    >>> from planner.recognition.session import Session
+    >>> sq = object_from_dict({"name": "sq", "outline": [[-1, -1], [1, -1], [1, 1], [-1, 1]]})
+    >>> touch = Observation(SensingPath((0, -10), (0, 1), 20), Contact((0, -1), (0, -1)))
+    >>> session = Session([sq], workspace=Workspace((0, 0), 10)).observe(touch)
+    >>> session_picture(session, (10, 0), fmt="svg")[:5]
+    b'<?xml'
+    """
+    hyps = session.hypotheses
+    mii = build_mii(hyps, session.models) if view in ("vector", "both") else None
+    grid = build_grid(hyps, session.models, grid_size) if view in ("grid", "both") else None
+    ranked = () if plan is None else plan.paths if paths is None else plan.paths[:paths]
+    kwargs: dict[str, Any] = {
+        "contacts": session.observations,
+        "workspace": session.workspace,
+        "sensor_position": sensor_position,
+        "paths": [p.path for p in ranked],
+        "p_distinguishing": [p.p_distinguishing for p in ranked],
+        "title": title,
+    }
+    if fmt == "svg":
+        return render_svg(mii, grid, **kwargs)
+    return render_png(mii, grid, dpi=dpi, **kwargs)

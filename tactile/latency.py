@@ -22,9 +22,10 @@ import httpx
 import numpy as np
 
 from hardware_sim.world import random_world
-from planner.models.library import load_objects
+from planner.codec import observation_to_dict
+from planner.models.library import load_objects, object_file
 from planner.types import SensingPath, SensorBounds, Workspace
-from tests.app.api_support import ROOT, Server
+from tactile.server import Server
 
 
 def _percentiles(values: list[float]) -> dict[str, float]:
@@ -38,19 +39,19 @@ def _percentiles(values: list[float]) -> dict[str, float]:
     }
 
 
-def main() -> None:
+def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
-    parser.add_argument("--objects", default=str(ROOT / "planner/data/workshop.json"))
+    parser.add_argument("--objects", default="workshop", help="object file or embedded set name")
     parser.add_argument("--trials", type=int, default=6)
     parser.add_argument("--max-touches", type=int, default=6)
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--strategy", default="lookahead")
     parser.add_argument("--budget-ms", type=float, default=500.0)
-    args = parser.parse_args()
+    args = parser.parse_args(argv)
 
     models = load_objects(args.objects)
-    documents = json.loads(Path(args.objects).read_text())["objects"]
+    documents = json.loads(object_file(args.objects).read_text())["objects"]
     workspace = Workspace((0.0, 0.0), 200.0)
     bounds = SensorBounds(1.0, math.radians(5.0))
     rng = np.random.default_rng(args.seed)
@@ -91,16 +92,7 @@ def main() -> None:
                         tuple(best["origin"]), tuple(best["direction"]), best["length"]
                     )
                     obs, _ = world.execute(path, bounds, rng)
-                    payload = {
-                        "path": {
-                            "origin": list(obs.path.origin),
-                            "direction": list(obs.path.direction),
-                            "length": obs.path.length,
-                        },
-                        "contact": None
-                        if obs.contact is None
-                        else {"point": list(obs.contact.point), "normal": list(obs.contact.normal)},
-                    }
+                    payload = observation_to_dict(obs)
                     t0 = time.perf_counter()
                     r = http.post(f"/v1/sessions/{sid}/observations", json=payload)
                     post_ms.append((time.perf_counter() - t0) * 1000)

@@ -23,12 +23,12 @@ import json
 import math
 import os
 from importlib import resources
-from typing import Any
 
 import numpy as np
 from locust import FastHttpUser, between, task
 
 from hardware_sim.world import World, random_world
+from planner.codec import observation_to_dict, sensor_to_dict, workspace_to_dict
 from planner.models.library import parse_objects
 from planner.types import Observation, SensingPath, SensorBounds, Workspace
 
@@ -47,20 +47,6 @@ KEEPALIVE = os.environ.get("LOADTEST_KEEPALIVE", "1") != "0"
 DONE = ("localized", "inconsistent")
 
 
-def _body(obs: Observation) -> dict[str, Any]:
-    path, contact = obs.path, obs.contact
-    return {
-        "path": {
-            "origin": list(path.origin),
-            "direction": list(path.direction),
-            "length": path.length,
-        },
-        "contact": None
-        if contact is None
-        else {"point": list(contact.point), "normal": list(contact.normal)},
-    }
-
-
 class _Fleet(FastHttpUser):
     abstract = True
     wait_time = between(0.0, 0.05)
@@ -74,11 +60,8 @@ class _Fleet(FastHttpUser):
             "/v1/sessions",
             json={
                 "objects": OBJECTS,
-                "sensor": {
-                    "position_error": BOUNDS.position_error,
-                    "normal_error": BOUNDS.normal_error,
-                },
-                "workspace": {"center": list(WORKSPACE.center), "radius": WORKSPACE.radius},
+                "sensor": sensor_to_dict(BOUNDS),
+                "workspace": workspace_to_dict(WORKSPACE),
                 "sensor_position": [WORKSPACE.radius, 0.0],
                 "strategy": STRATEGY,
             },
@@ -89,7 +72,7 @@ class _Fleet(FastHttpUser):
     def _observe(self, sid: str, obs: Observation) -> str | None:
         state = self.client.post(
             f"/v1/sessions/{sid}/observations{OBSERVE_QUERY}",
-            json=_body(obs),
+            json=observation_to_dict(obs),
             name="POST /v1/sessions/{id}/observations",
         )
         return state.json()["status"] if state.status_code == 201 else None

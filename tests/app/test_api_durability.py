@@ -16,7 +16,8 @@ import threading
 import httpx
 
 from app.serve import bind_socket
-from tests.app.api_support import BOTTOM, SQUARE, WORKSPACE, Server, miss
+from tactile.server import Server
+from tests.app.api_support import BOTTOM, SQUARE, WORKSPACE, miss
 
 
 def _signature(obs: dict) -> tuple:

@@ -12,9 +12,10 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 import app.convert
-from app.convert import build_session, catch_up, derive, observation_to_dict
+from app.convert import build_session, catch_up, derive
 from app.store import SessionRecord
 from hardware_sim.world import random_world
+from planner.codec import observation_to_dict
 from planner.recognition.session import Session
 from planner.types import SensorBounds
 from tests.app.api_support import BOTTOM, RIGHT, SQUARE, WORKSPACE, api, miss

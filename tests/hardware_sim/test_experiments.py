@@ -25,7 +25,7 @@ from hardware_sim.world import World, random_world
 from planner.models.library import load_objects
 from planner.planning.config import StrategyConfig
 from planner.planning.result import opening_path
-from planner.recognition.interpretation import RecognitionConfig
+from planner.recognition.config import RecognitionConfig
 from planner.types import Observation, Pose, SensingPath, SensorBounds, Workspace
 from tests.conftest import ELL, SMALL_WS, SQUARE, WEDGE, small_spec
 

@@ -157,3 +157,23 @@ def test_objects_by_registered_name(http, client):
     )
     assert update.status == "ambiguous"
     assert {e.object for e in service.estimates()} == {"sq40"}
+
+
+def test_an_observation_is_sent_in_the_form_the_service_stores(http, client):
+    service = _new(client)
+    touch = Observation(
+        SensingPath((200.0, 0.0), (-2.0, 0.0), 400.0), Contact((40.0, 0.0), (3.0, 0.0), 0.25)
+    )
+    service.observe(touch)
+    service.observe(Observation(SensingPath((200.0, 5.0), (-1.0, 0.0), 5.0), None))
+    answered = http.get(f"/v1/sessions/{service.session_id}").json()["observations"]
+    assert [{k: v for k, v in o.items() if k != "index"} for o in answered] == [
+        {
+            "path": {"origin": [200.0, 0.0], "direction": [-1.0, 0.0], "length": 400.0},
+            "contact": {"point": [40.0, 0.0], "normal": [1.0, 0.0], "normal_z": 0.25},
+        },
+        {
+            "path": {"origin": [200.0, 5.0], "direction": [-1.0, 0.0], "length": 5.0},
+            "contact": None,
+        },
+    ]

@@ -6,15 +6,21 @@ import struct
 import subprocess
 import sys
 import xml.etree.ElementTree as ET
+from concurrent.futures import ThreadPoolExecutor
 from functools import cache
 from pathlib import Path
 
 import pytest
 
 from planner.errors import PlanningNotPossibleError
-from planner.image.grid import build_grid, thesis_paths
+from planner.image.grid import build_grid
 from planner.image.vector import build_mii
-from planner.render import render_png, render_svg
+from planner.image.windows import thesis_paths
+from planner.models.library import object_from_dict
+from planner.planning.config import StrategyConfig
+from planner.planning.plan import plan_session
+from planner.recognition.session import Session
+from planner.render import render_png, render_svg, session_picture
 from planner.types import Contact, Observation, SensingPath, Workspace
 from tests.planner.image.test_vector import BUMP_CONTACTS, bump_block_case
 
@@ -111,3 +117,57 @@ def test_matplotlib_is_lazy_and_pyplot_never_loaded():
     )
     root = Path(__file__).resolve().parents[2]
     subprocess.run([sys.executable, "-c", code], check=True, timeout=120, cwd=root)
+
+
+@cache
+def touched_session():
+    square = object_from_dict({"name": "square", "outline": [[-1, -1], [1, -1], [1, 1], [-1, 1]]})
+    rect = object_from_dict({"name": "rect", "outline": [[-2, -1], [2, -1], [2, 1], [-2, 1]]})
+    workspace = Workspace((0.0, 0.0), 10.0)
+    bottom = Contact((0.0, -1.0), (0.0, -1.0))
+    touch = Observation(SensingPath((0.0, -10.0), (0.0, 1.0), 20.0), bottom)
+    session = Session([square, rect], workspace=workspace).observe(touch)
+    plan = plan_session(session, (10.0, 0.0), StrategyConfig(name="pdm", budget_ms=2000), 0)
+    return session, plan
+
+
+def test_session_picture_is_the_session_drawn_with_its_ranked_paths():
+    session, plan = touched_session()
+    assert len(plan.paths) >= 3
+    svg = session_picture(session, (10.0, 0.0), plan, fmt="svg", paths=2, title="touched")
+    found = ids(svg)
+    assert {"path-1", "path-2", "grid-path-1", "contact-0", "safe-circle", "sensor"} <= found
+    assert "path-3" not in found and "grid-image" in found and "outline-0" in found
+    ranked = plan.paths[:2]
+    assert svg == render_svg(
+        build_mii(session.hypotheses, session.models),
+        build_grid(session.hypotheses, session.models, 70),
+        contacts=session.observations,
+        workspace=session.workspace,
+        sensor_position=(10.0, 0.0),
+        paths=[p.path for p in ranked],
+        p_distinguishing=[p.p_distinguishing for p in ranked],
+        title="touched",
+    )
+
+
+def test_session_picture_views_formats_and_no_plan():
+    session, plan = touched_session()
+    vector = ids(session_picture(session, (10.0, 0.0), plan, fmt="svg", view="vector"))
+    assert "outline-0" in vector and "grid-image" not in vector
+    assert {f"path-{k}" for k in range(1, len(plan.paths) + 1)} <= vector
+    grid = ids(session_picture(session, (10.0, 0.0), None, fmt="svg", view="grid", grid_size=30))
+    assert "grid-image" in grid and "outline-0" not in grid and "path-1" not in grid
+    png = session_picture(session, (10.0, 0.0), plan, view="vector", dpi=50)
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    assert struct.unpack(">II", png[16:24]) == (round(6.8 * 50), round(6.0 * 50))
+
+
+def test_pictures_drawn_in_threads_are_the_pictures_drawn_one_by_one():
+    mii, grid, paths = scene()
+    serial = render_svg(mii, grid, paths=paths, workspace=WORKSPACE)
+    with ThreadPoolExecutor(3) as pool:
+        drawn = list(
+            pool.map(lambda _: render_svg(mii, grid, paths=paths, workspace=WORKSPACE), range(3))
+        )
+    assert drawn == [serial] * 3

@@ -1,0 +1,72 @@
+"""The stored configuration of a new session (DESIGN §6 ``POST /v1/sessions``).
+
+The create body, validated by its schema, with its object references resolved
+(registered names or inline §8 objects) into planner models, then written in the
+form the store keeps and :func:`app.convert.build_session` reads back: the
+objects as §8 dictionaries, sensor bounds, safe circle, the sensor's place on
+it (default: the circle's +x point), strategy settings and allowed outliers.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from typing import Any
+
+from app.convert import strategy_config
+from app.errors import InvalidInputError
+from planner.codec import sensor_to_dict, workspace_to_dict
+from planner.models.library import object_from_dict, object_to_dict
+from planner.types import ObjectModel, SensorBounds, Workspace
+
+__all__ = ["resolve_models", "session_config"]
+
+
+def resolve_models(
+    refs: Sequence[str | Mapping[str, Any]], stored: Mapping[str, Any]
+) -> list[ObjectModel]:
+    """The models of a session's `refs`: a name is looked up in `stored` (the
+    registered objects by name), a dictionary is read as an inline object; each
+    object once. Errors name the offending ``objects[i]``."""
+    models = []
+    for i, ref in enumerate(refs):
+        if isinstance(ref, str):
+            if ref not in stored:
+                raise InvalidInputError(
+                    f"no registered object named {ref!r}; register it with "
+                    "POST /v1/objects or give it inline",
+                    field=f"objects[{i}]",
+                )
+            models.append(object_from_dict(stored[ref], field=f"objects[{i}]"))
+        else:
+            models.append(object_from_dict(ref, field=f"objects[{i}]"))
+    seen: dict[str, int] = {}
+    for i, m in enumerate(models):
+        if m.name in seen:
+            raise InvalidInputError(
+                f"object {m.name!r} appears twice (also objects[{seen[m.name]}])",
+                field=f"objects[{i}]",
+            )
+        seen[m.name] = i
+    return models
+
+
+def session_config(body: Mapping[str, Any], models: Sequence[ObjectModel]) -> dict[str, Any]:
+    """The stored configuration of a session created with `body` over `models`
+    (checked by the planner: sensor bounds, safe circle, strategy)."""
+    ws = body["workspace"]
+    workspace = Workspace(tuple(ws["center"]), ws["radius"])
+    sensor = SensorBounds(**body["sensor"])
+    position = body.get("sensor_position") or [
+        workspace.center[0] + workspace.radius,
+        workspace.center[1],
+    ]
+    cfg = {
+        "objects": [object_to_dict(m) for m in models],
+        "sensor": sensor_to_dict(sensor),
+        "workspace": workspace_to_dict(workspace),
+        "sensor_position": [float(v) for v in position],
+        "strategy": dict(body["strategy"]),
+        "max_outliers": body["max_outliers"],
+    }
+    strategy_config(cfg)  # the planner's own checks
+    return cfg
