@@ -206,7 +206,7 @@ class Faces:
 class StablePose:
     """One outline of an object (counter-clockwise, holes clockwise) and its prior.
 
-    Build it with :func:`planner.geometry.make_stable_pose`, which validates and
+    Build it with :func:`planner.models.outlines.make_stable_pose`, which validates and
     orients the rings; `normal_z` (one value per face, or None) is the
     out-of-plane normal component of the 3-D face each outline face was cut from.
     """

@@ -43,7 +43,7 @@ def draw_poses(
     position uniform among those keeping every vertex inside the safe circle
     (``v_world = R(theta) v + t``), by rejection in batches.
 
-    >>> from planner.geometry import make_stable_pose
+    >>> from planner.models.outlines import make_stable_pose
     >>> sq = make_stable_pose([[-1, -1], [1, -1], [1, 1], [-1, 1]])
     >>> theta, t = draw_poses(sq, Workspace((0, 0), 3), 100, np.random.default_rng(0))
     >>> bool(np.all(np.hypot(*t.T) <= 3 - 1))   # the corners stay inside
