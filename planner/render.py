@@ -384,24 +384,18 @@ def render_svg(
     >>> render_svg(build_mii(hs, [sq]))[:5]
     b'<?xml'
     """
-    from matplotlib import rc_context
-
-    buf = io.BytesIO()
-    with _DRAWING:
-        fig = _figure(
-            mii,
-            grid,
-            contacts=contacts,
-            workspace=workspace,
-            sensor_position=sensor_position,
-            paths=paths,
-            p_distinguishing=p_distinguishing,
-            title=title,
-            panel_inches=panel_inches,
-        )
-        with rc_context({"svg.hashsalt": "tactile-planner", "svg.fonttype": "none"}):
-            fig.savefig(buf, format="svg", metadata={"Date": None})
-    return buf.getvalue()
+    return _picture_bytes(
+        "svg",
+        mii,
+        grid,
+        contacts=contacts,
+        workspace=workspace,
+        sensor_position=sensor_position,
+        paths=paths,
+        p_distinguishing=p_distinguishing,
+        title=title,
+        panel_inches=panel_inches,
+    )
 
 
 def render_png(
@@ -418,20 +412,36 @@ def render_png(
     dpi: int = 100,
 ) -> bytes:
     """PNG of the same picture as :func:`render_svg`, `dpi` pixels per inch."""
+    return _picture_bytes(
+        "png",
+        mii,
+        grid,
+        dpi=dpi,
+        contacts=contacts,
+        workspace=workspace,
+        sensor_position=sensor_position,
+        paths=paths,
+        p_distinguishing=p_distinguishing,
+        title=title,
+        panel_inches=panel_inches,
+    )
+
+
+def _picture_bytes(
+    fmt: str, mii: VectorMII | None, grid: GridMII | None, dpi: int = 100, **figure: Any
+) -> bytes:
+    """The figure drawn (one at a time: matplotlib is not thread-safe) and saved as
+    `fmt`; SVG with a fixed hash salt and no date, so equal pictures are equal bytes."""
+    from matplotlib import rc_context
+
     buf = io.BytesIO()
     with _DRAWING:
-        fig = _figure(
-            mii,
-            grid,
-            contacts=contacts,
-            workspace=workspace,
-            sensor_position=sensor_position,
-            paths=paths,
-            p_distinguishing=p_distinguishing,
-            title=title,
-            panel_inches=panel_inches,
-        )
-        fig.savefig(buf, format="png", dpi=dpi)
+        fig = _figure(mii, grid, **figure)
+        if fmt == "svg":
+            with rc_context({"svg.hashsalt": "tactile-planner", "svg.fonttype": "none"}):
+                fig.savefig(buf, format="svg", metadata={"Date": None})
+        else:
+            fig.savefig(buf, format="png", dpi=dpi)
     return buf.getvalue()
 
 

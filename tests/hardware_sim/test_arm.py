@@ -8,10 +8,8 @@ import math
 import numpy as np
 import pytest
 
-from hardware_sim import arm as arm_module
 from hardware_sim.arm import ArmParams, SimulatedArm, slide_off_vertex
 from hardware_sim.presets import build_arm, explicit_preset
-from hardware_sim.protocol import Probe
 from hardware_sim.sensor import ExactSensor
 from hardware_sim.world import World, random_world
 from planner.models.library import object_from_dict
@@ -28,10 +26,6 @@ def square_world(theta: float = 0.0) -> World:
 
 def exact_arm(world: World, seed: int = 0, **params: float) -> SimulatedArm:
     return SimulatedArm(world, ArmParams(**params), ExactSensor(), np.random.default_rng(seed))
-
-
-def test_simulated_arm_is_a_probe():
-    assert isinstance(build_arm(square_world(), "ideal"), Probe)
 
 
 @pytest.mark.parametrize("set_name", SET_NAMES)
@@ -184,8 +178,3 @@ def test_same_seed_same_probe_results():
     a, b = build_arm(world, "e2_arm", 9), build_arm(world, "e2_arm", 9)
     for p in paths:
         assert a.execute(p) == b.execute(p)
-
-
-def test_public_names_exist():
-    for name in arm_module.__all__:
-        assert hasattr(arm_module, name)

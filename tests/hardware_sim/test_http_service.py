@@ -13,7 +13,7 @@ from fastapi.testclient import TestClient
 
 from app.main import create_app
 from hardware_sim.api_client import Client
-from hardware_sim.client import InProcessService, RecognitionService, run_recognition
+from hardware_sim.client import InProcessService, run_recognition
 from hardware_sim.http_service import HttpService, InvalidRequestError, StaleVersionError
 from hardware_sim.presets import build_arm, explicit_preset
 from hardware_sim.world import random_world
@@ -44,11 +44,6 @@ def _new(client: Client, seed: int = 0, **kw) -> HttpService:
     return HttpService.create(
         client, MODELS, PRESET.bounds, WORKSPACE, strategy={**PDM, "seed": seed}, **kw
     )
-
-
-def test_http_service_is_a_recognition_service(client):
-    service: RecognitionService = _new(client)
-    assert isinstance(service, HttpService)
 
 
 @pytest.mark.parametrize("seed", [0, 1, 2, 5])

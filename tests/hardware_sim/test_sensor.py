@@ -8,7 +8,6 @@ import numpy as np
 import pytest
 from scipy import signal
 
-from hardware_sim import sensor as sensor_module
 from hardware_sim.accuracy import touch_errors
 from hardware_sim.arm import ArmParams
 from hardware_sim.presets import PRESETS, build_arm
@@ -147,8 +146,3 @@ def test_recalibration_reduces_drift_error():
     assert np.mean(without) > 3 * np.mean(with_)
     assert np.max(with_) <= PRESETS["thesis_sensor"].bounds.normal_error
     assert np.max(without) > PRESETS["thesis_sensor"].bounds.normal_error
-
-
-def test_public_names_exist():
-    for name in sensor_module.__all__:
-        assert hasattr(sensor_module, name)
