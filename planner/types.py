@@ -21,6 +21,7 @@ from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
 
 __all__ = [
+    "Accuracy",
     "Contact",
     "ErrorBound",
     "Faces",
@@ -99,6 +100,43 @@ class SensorBounds:
                 raise InvalidObservationError("must be a finite number >= 0", field=name)
         if self.normal_error >= math.pi / 4:
             raise InvalidObservationError("must be below pi/4 radians", field="normal_error")
+
+
+@dataclass(frozen=True)
+class Accuracy:
+    """What `localized` requires of the pose (DESIGN §2, §6): the bound on the
+    translation at most `translation` (length) and on the rotation at most
+    `rotation` (radians). :meth:`default_for` gives one fitted to the sensor."""
+
+    translation: float
+    rotation: float
+
+    def __post_init__(self) -> None:
+        for name in ("translation", "rotation"):
+            value = getattr(self, name)
+            if not math.isfinite(value) or value <= 0:
+                raise InvalidObservationError(
+                    "must be a finite number > 0", field=f"accuracy.{name}"
+                )
+
+    @classmethod
+    def default_for(cls, sensor: SensorBounds, diameter: float) -> Accuracy:
+        """The default for a sensor and the largest object's effective diameter
+        (twice its farthest vertex from the centroid): ``5 eps_d + 2%`` of the
+        diameter, and ``2 phi + 0.02`` rad. Five position errors is what two or
+        three well-placed touches bound the translation to; twice the normal
+        error is the rotation any two normals leave; the 2% keep exact sensing
+        from asking for the impossible.
+
+        >>> a = Accuracy.default_for(SensorBounds(1.0, math.radians(3)), 100.0)
+        >>> round(a.translation, 3), round(math.degrees(a.rotation), 2)
+        (7.0, 7.15)
+        """
+        return cls(5 * sensor.position_error + 0.02 * diameter, 2 * sensor.normal_error + 0.02)
+
+    def admits(self, bound: ErrorBound) -> bool:
+        """True when `bound` is within this accuracy."""
+        return bound.translation <= self.translation and bound.rotation <= self.rotation
 
 
 @dataclass(frozen=True)

@@ -20,22 +20,25 @@ the last observation.
 
 from __future__ import annotations
 
+import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
-from scipy.sparse import coo_matrix
-from scipy.sparse.csgraph import connected_components
-from scipy.spatial import cKDTree
 
 from planner.errors import InvalidObservationError
-from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.memo import cached_property
 from planner.recognition.config import RecognitionConfig
+from planner.recognition.equivalence import (
+    SYMMETRY_FLOOR,
+    PosedRings,
+    equivalence_classes,
+)
 from planner.recognition.evaluate import PoseSamples, evaluate
 from planner.recognition.tree import Group, TreeLevel, extend, make_groups
 from planner.types import (
+    Accuracy,
     ErrorBound,
     Hypothesis,
     InterpretationId,
@@ -46,9 +49,22 @@ from planner.types import (
     Workspace,
 )
 
-__all__ = ["Session", "Status"]
+__all__ = ["Localization", "Session", "Status"]
 
 Status = Literal["awaiting_contact", "ambiguous", "localized", "inconsistent"]
+
+
+@dataclass(frozen=True)
+class Localization:
+    """How far a session is from `localized` (DESIGN §2): the number of equivalence
+    `classes` left, the `bound` of the most probable class (None without a
+    hypothesis), the required `accuracy`, and what is `missing`: ``one_class``
+    while several classes are left, ``accuracy`` while the bound exceeds it."""
+
+    classes: int
+    bound: ErrorBound | None
+    accuracy: Accuracy
+    missing: tuple[str, ...]
 
 
 @dataclass(frozen=True, eq=False)
@@ -68,6 +84,7 @@ class Session:
         config: RecognitionConfig | None = None,
         observations: Iterable[Observation] = (),
         *,
+        accuracy: Accuracy | None = None,
         _parent: Session | None = None,
     ) -> None:
         if not models:
@@ -85,6 +102,15 @@ class Session:
             _parent._groups if _parent is not None else make_groups(list(self.models))
         )
         self.length_scale = max(g.stable.centroid_radius for g in self._groups)
+        self.accuracy = accuracy or self._default_accuracy()
+
+    def _default_accuracy(self) -> Accuracy:
+        """:meth:`Accuracy.default_for` the sensor; with the thesis' fixed error disk,
+        which never shrinks, nothing beyond one class (as the thesis asked)."""
+        diameter = 2 * self.length_scale
+        if self.config.bound_mode == "thesis":
+            return Accuracy(diameter, math.pi)
+        return Accuracy.default_for(self.sensor, diameter)
 
     # -- events -----------------------------------------------------------------
     def observe(self, observation: Observation) -> Session:
@@ -95,6 +121,7 @@ class Session:
             self.workspace,
             self.config,
             (*self.observations, observation),
+            accuracy=self.accuracy,
             _parent=self,
         )
 
@@ -105,7 +132,12 @@ class Session:
         if self._parent is not None:
             return self._parent
         return Session(
-            self.models, self.sensor, self.workspace, self.config, self.observations[:-1]
+            self.models,
+            self.sensor,
+            self.workspace,
+            self.config,
+            self.observations[:-1],
+            accuracy=self.accuracy,
         )
 
     @property
@@ -167,7 +199,7 @@ class Session:
         weight = np.concatenate([c.weight for c in cands])
         total = weight.sum()
         prob = weight / total if total > 0 else np.full(len(weight), 1 / len(weight))
-        classes = self._equivalence(cands)
+        classes = self._equivalence(cands, prob)
         class_prob = np.bincount(classes, weights=prob)
         rank = np.empty(len(class_prob), np.int64)
         rank[np.argsort(-class_prob, kind="stable")] = np.arange(len(class_prob))
@@ -196,59 +228,58 @@ class Session:
         out.sort(key=lambda h: (-h.probability, h.equivalence_class))
         return out
 
-    def _equivalence(self, cands: list[PoseSamples]) -> np.ndarray:
-        """Class label per hypothesis: posed outlines that coincide within tolerance.
+    @property
+    def symmetry_tolerance(self) -> float:
+        """``tau``: posed outlines closer than this are one equivalence class (DESIGN
+        §2): ``2 eps_d``, fixed by the sensor; with the thesis' fixed error disk, half
+        that disk, as the thesis merged what its disk could not tell apart."""
+        tau = max(2 * self.sensor.position_error, SYMMETRY_FLOOR * self.length_scale)
+        if self.config.bound_mode == "thesis":
+            core = [c.eps_t - c.cell for c in self._derived.candidates if len(c.weight)]
+            if core:
+                tau = max(tau, float(np.median(np.concatenate(core))) / 2)
+        return tau
 
-        Two hypotheses are equivalent when their posed vertex sets are within
-        ``max(core eps_t)/2`` of each other (Hausdorff), core eps_t leaving out a
-        family sample's cell: samples along one slide family are never merged.
-        """
-        verts, centroid, tol, group, row, nvert = [], [], [], [], [], []
-        for c in cands:
-            stable = self._groups[c.group].stable
-            R = rotation_matrices(c.theta)
-            posed = np.einsum("nij,vj->nvi", R, stable.outline) + c.t[:, None, :]
-            verts.extend(posed)
-            centroid.append(posed.mean(axis=1))
-            tol.append((c.eps_t - c.cell) / 2)
-            group.append(np.full(len(c.row), c.group))
-            row.append(c.row)
-            nvert.extend([len(stable.outline)] * len(c.weight))
-        centroid_a = np.concatenate(centroid)
-        tol_a = np.concatenate(tol) + 10 * LENGTH_SLACK * self.length_scale
-        group_a, row_a = np.concatenate(group), np.concatenate(row)
-        nvert_a = np.asarray(nvert)
-        n = len(centroid_a)
-        pairs = cKDTree(centroid_a).query_pairs(
-            r=float(tol_a.max()) * 1.0001, output_type="ndarray"
-        )
-        if len(pairs):
-            i, j = pairs[:, 0], pairs[:, 1]
-            same = (group_a[i] == group_a[j]) & (row_a[i] == row_a[j])
-            ok = (nvert_a[i] == nvert_a[j]) & ~same
-            i, j = i[ok], j[ok]
-            keep = np.zeros(len(i), dtype=bool)
-            for v in np.unique(nvert_a[i]):
-                sel = np.flatnonzero(nvert_a[i] == v)
-                a = np.stack([verts[k] for k in i[sel]])
-                b = np.stack([verts[k] for k in j[sel]])
-                d = np.linalg.norm(a[:, :, None, :] - b[:, None, :, :], axis=-1)
-                haus = np.maximum(d.min(axis=2).max(axis=1), d.min(axis=1).max(axis=1))
-                keep[sel] = haus <= np.maximum(tol_a[i[sel]], tol_a[j[sel]])
-            i, j = i[keep], j[keep]
-        else:
-            i = j = np.zeros(0, np.int64)
-        graph = coo_matrix((np.ones(len(i)), (i, j)), shape=(n, n))
-        return connected_components(graph, directed=False)[1]
+    def _equivalence(self, cands: list[PoseSamples], prob: np.ndarray) -> np.ndarray:
+        """Class label per hypothesis (:mod:`planner.recognition.equivalence`): posed
+        outlines within the symmetry tolerance of each other, most probable first."""
+        tau = self.symmetry_tolerance
+        rings = [PosedRings.of(self._groups[c.group].stable, c.theta, c.t) for c in cands]
+        order = np.argsort(-prob, kind="stable")
+        return equivalence_classes(rings, order, _interpretation_labels(cands), tau)
 
     @property
     def status(self) -> Status:
+        """``localized`` when one equivalence class is left AND its bound is within
+        the session's accuracy; ``ambiguous`` while either is missing."""
         if not self.contacts:
             return "awaiting_contact"
-        classes = {h.equivalence_class for h in self.hypotheses}
-        if not classes:
+        if not self.hypotheses:
             return "inconsistent"
-        return "localized" if len(classes) == 1 else "ambiguous"
+        return "localized" if not self.localization.missing else "ambiguous"
+
+    @cached_property
+    def localization(self) -> Localization:
+        """How far the session is from `localized`: classes left, the bound of the
+        most probable class, and what is missing."""
+        hyps = self.hypotheses
+        classes = len({h.equivalence_class for h in hyps})
+        if not hyps:
+            return Localization(0, None, self.accuracy, ("one_class",))
+        best = hyps[0].equivalence_class
+        members = [h for h in hyps if h.equivalence_class == best]
+        half = self.symmetry_tolerance / 2
+        # the members lie within tau/2 of the leader's outline: the class bound is
+        # the widest member's, its outline disk widened by tau (diameter)
+        bound = ErrorBound(
+            max(h.error_bound.translation for h in members) + half,
+            max(h.error_bound.rotation for h in members),
+            max(h.error_bound.eps_t for h in members) + 2 * half,
+        )
+        missing = (() if classes == 1 else ("one_class",)) + (
+            () if self.accuracy.admits(bound) else ("accuracy",)
+        )
+        return Localization(classes, bound, self.accuracy, missing)
 
     def posed_outline(self, hypothesis: Hypothesis) -> np.ndarray:
         """World coordinates of a hypothesis' outline."""
@@ -260,3 +291,10 @@ def _reindex(c: PoseSamples, rows: np.ndarray) -> PoseSamples:
     return PoseSamples(
         c.group, rows, c.theta, c.t, c.d_translation, c.d_theta, c.eps_t, c.cell, c.weight
     )
+
+
+def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:
+    """One label per hypothesis naming the interpretation (group, row) it was posed
+    from: the samples of one slide family share it."""
+    pairs = np.concatenate([np.column_stack([np.full(len(c.row), c.group), c.row]) for c in cands])
+    return np.unique(pairs, axis=0, return_inverse=True)[1].ravel()

@@ -1,0 +1,148 @@
+"""Equivalence classes of hypotheses: posed outlines that coincide (DESIGN §2).
+
+Two hypotheses are equivalent when their posed outlines coincide within the
+symmetry tolerance ``tau``: the rotations of a square, a disc turned about its
+centre, two congruent objects in the same place. ``tau`` is fixed by the sensor
+(``2 eps_d``: outlines closer than that give the same contacts within the
+errors), never by the pose error bounds, so two distinct poses that the error
+disks merely overlap stay apart.
+
+A class never chains. The hypotheses are taken most probable first; the first
+one not yet in a class leads a new class and takes in every hypothesis not yet
+in one whose outline lies within ``tau / 2`` of its own. Any two members are
+then within ``tau`` of each other (the triangle inequality), whatever the
+order. The samples of one slide family (DESIGN §4.6) stay apart: the slide
+they sample is not known yet.
+
+Outline distance: the larger of the two directed distances from the points of
+one posed outline's boundary (holes included) to the faces of the other, a
+symmetric Hausdorff distance between the boundaries measured at every vertex
+and at `EDGE_SAMPLES` points inside every face (vertices alone miss a
+non-convex outline turned so that its corners fall on the other's edges). Only
+pairs that can pass are measured: when every vertex of A lies within d of B's
+faces and back, the support functions ``h(u) = max_v u.v`` of the two vertex
+sets differ by at most d in every direction u, so a k-d tree over the support
+values in a few directions (max norm) finds every candidate pair, and the
+work grows with the hypotheses and the faces, not with their pairs.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+
+import numpy as np
+from scipy.spatial import cKDTree
+
+from planner.geometry import rotation_matrices
+from planner.types import StablePose
+
+__all__ = ["SUPPORT_DIRECTIONS", "SYMMETRY_FLOOR", "PosedRings", "equivalence_classes"]
+
+#: Smallest symmetry tolerance, as a share of the scene's scale: exact sensing
+#: still leaves rounding between the rotations of a symmetric outline.
+SYMMETRY_FLOOR = 1e-6
+#: Points measured inside each face, besides its ends.
+EDGE_SAMPLES = 7
+#: Unit directions (every 30 degrees) of the support values that find candidate pairs.
+SUPPORT_DIRECTIONS = np.column_stack(
+    [np.cos(np.arange(12) * np.pi / 6), np.sin(np.arange(12) * np.pi / 6)]
+)
+
+
+@dataclass(frozen=True, eq=False)
+class PosedRings:
+    """Posed outlines of N hypotheses of one stable pose: `points` (N, P, 2) on the
+    boundary in the world frame (every vertex and `EDGE_SAMPLES` points inside
+    each face), `starts`/`ends` (N, F, 2) of every face, and `support` (N, K): the
+    support function of the vertices in the K directions of
+    :data:`SUPPORT_DIRECTIONS`."""
+
+    points: np.ndarray
+    starts: np.ndarray
+    ends: np.ndarray
+    support: np.ndarray
+
+    @classmethod
+    def of(cls, stable: StablePose, theta: np.ndarray, t: np.ndarray) -> PosedRings:
+        """The stable pose moved to each pose (theta (N,), t (N, 2)):
+        ``v_world = R(theta) v_model + t``."""
+        R = rotation_matrices(np.asarray(theta, dtype=float))
+        t = np.asarray(t, dtype=float).reshape(-1, 2)
+
+        def move(points: np.ndarray) -> np.ndarray:
+            return np.einsum("nij,vj->nvi", R, points) + t[:, None, :]
+
+        faces = stable.faces
+        share = np.arange(EDGE_SAMPLES + 1) / (EDGE_SAMPLES + 1)
+        along = faces.start[:, None, :] + share[None, :, None] * (faces.end - faces.start)[:, None]
+        starts = move(faces.start)
+        support = (starts @ SUPPORT_DIRECTIONS.T).max(axis=1)
+        return cls(move(along.reshape(-1, 2)), starts, move(faces.end), support)
+
+    def __len__(self) -> int:
+        return len(self.support)
+
+
+def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """(M,) largest distance from each of M point sets (M, P, 2) to its face set
+    (M, F, 2 each): ``max_p min_f |p - segment f|``."""
+    p = points[:, :, None, :]
+    a, b = starts[:, None, :, :], ends[:, None, :, :]
+    e = b - a
+    sq = np.maximum(np.einsum("...i,...i", e, e), 1e-300)
+    # closest point a + u (b - a), u = clip((p - a).(b - a) / |b - a|^2, 0, 1)
+    u = np.clip(np.einsum("...i,...i", p - a, e) / sq, 0.0, 1.0)
+    gap = p - (a + u[..., None] * e)
+    return np.sqrt(np.einsum("...i,...i", gap, gap).min(axis=2)).max(axis=1)
+
+
+def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> np.ndarray:
+    """Distance of hypothesis `i` of `a` to each hypothesis `rows` of `b`: the larger
+    of the two directed boundary-to-face distances between their posed outlines."""
+    rows = np.asarray(rows, dtype=np.int64)
+    if not len(rows):
+        return np.zeros(0)
+    one = np.broadcast_to(a.points[i], (len(rows), *a.points[i].shape))
+    starts = np.broadcast_to(a.starts[i], (len(rows), *a.starts[i].shape))
+    ends = np.broadcast_to(a.ends[i], (len(rows), *a.ends[i].shape))
+    there = _to_faces(one, b.starts[rows], b.ends[rows])
+    back = _to_faces(b.points[rows], starts, ends)
+    return np.maximum(there, back)
+
+
+def equivalence_classes(
+    rings: Sequence[PosedRings], order: np.ndarray, family: np.ndarray, tau: float
+) -> np.ndarray:
+    """Class label (N,) of N hypotheses stacked over the stable poses of `rings`.
+
+    `order` (N,) is the order in which hypotheses lead classes (most probable
+    first); `family` (N,) labels the interpretation each came from (samples of
+    one slide family never share a class); `tau` is the symmetry tolerance.
+    """
+    sizes = [len(r) for r in rings]
+    offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
+    n = int(offsets[-1])
+    label = np.full(n, -1, dtype=np.int64)
+    if not n:
+        return label
+    group = np.repeat(np.arange(len(rings)), sizes)
+    local = np.arange(n) - offsets[group]
+    support = np.concatenate([r.support for r in rings])
+    tree = cKDTree(support)
+    # a margin for rounding: the filter must never drop a pair that passes
+    reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
+    classes = 0
+    for leader in np.asarray(order, dtype=np.int64):
+        if label[leader] >= 0:
+            continue
+        label[leader] = classes
+        near = np.asarray(tree.query_ball_point(support[leader], r=reach, p=np.inf), np.int64)
+        near = near[(label[near] < 0) & (family[near] != family[leader])]
+        g = group[leader]
+        for h in np.unique(group[near]):
+            mine = near[group[near] == h]
+            close = outline_distance(rings[g], local[leader], rings[h], local[mine]) <= tau / 2
+            label[mine[close]] = classes
+        classes += 1
+    return label

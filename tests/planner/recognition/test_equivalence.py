@@ -1,0 +1,128 @@
+"""Equivalence is true symmetry only, and `localized` is never wrong (DESIGN §2).
+
+A class never holds two posed outlines farther apart than the symmetry tolerance
+(no chains), never two objects that are not congruent, and a continuous symmetry
+is one class. Whenever a session says `localized`, the true object is named and
+the true outline lies within the reported bound.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+import shapely
+
+from hardware_sim.world import random_world
+from planner.models.library import object_from_dict
+from planner.recognition.equivalence import PosedRings, equivalence_classes
+from planner.recognition.session import Session
+from planner.types import Accuracy, ObjectModel, SensorBounds
+from tests.conftest import SET_NAMES, WORKSPACE, object_set
+
+BOUNDS = SensorBounds(1.0, math.radians(3))
+#: Every shared set: the five of the first round, the near twins and the curved
+#: parts (the cam, over 500 vertices, is refused by the service and left out).
+ALL_SETS = [*SET_NAMES, "twins", "curved"]
+
+
+def models_of(name: str) -> list[ObjectModel]:
+    return [m for m in object_set(name) if m.name != "cam"]
+
+
+def posed(session: Session, h) -> shapely.Polygon:
+    stable = session.models_by_name[h.object].stable_poses[h.stable_pose]
+    return shapely.Polygon(h.pose.apply(stable.outline), [h.pose.apply(r) for r in stable.holes])
+
+
+def outline_gap(a: shapely.Polygon, b: shapely.Polygon) -> float:
+    """Hausdorff distance between the boundaries, densified (independent of the
+    vertex-based measure the classes are built with)."""
+    return float(shapely.hausdorff_distance(a.boundary, b.boundary, densify=0.05))
+
+
+def touched(models, seed: int, touches: int, bounds: SensorBounds = BOUNDS):
+    rng = np.random.default_rng(seed)
+    world = random_world(models, WORKSPACE, rng)
+    session = Session(models, bounds, WORKSPACE)
+    for _ in range(touches):
+        session = session.observe(world.execute(world.hitting_path(rng), bounds, rng)[0])
+    return world, session
+
+
+@pytest.mark.parametrize("name", ALL_SETS)
+@pytest.mark.parametrize("seed", range(3))
+def test_a_class_never_holds_outlines_farther_apart_than_its_tolerance(name, seed):
+    _, session = touched(models_of(name), seed, 2)
+    tau = session.symmetry_tolerance
+    by_class: dict[int, list] = {}
+    for h in session.hypotheses:
+        by_class.setdefault(h.equivalence_class, []).append(posed(session, h))
+    for members in by_class.values():
+        for i, a in enumerate(members):
+            for b in members[i + 1 :]:
+                # the vertex-based measure and a densified boundary one agree to 2%
+                assert outline_gap(a, b) <= tau * 1.02 + 1e-9
+
+
+@pytest.mark.parametrize("seed", range(6))
+def test_near_twins_never_share_a_class(seed):
+    _, session = touched(models_of("twins"), seed, 3)
+    objects: dict[int, set[str]] = {}
+    for h in session.hypotheses:
+        objects.setdefault(h.equivalence_class, set()).add(h.object)
+    assert all(len(names) == 1 for names in objects.values())
+
+
+def test_congruent_objects_in_one_place_are_one_class():
+    square = {"outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]}
+    a = object_from_dict({"name": "a", **square})
+    b = object_from_dict({"name": "b", **square})
+    _, session = touched([a, b], 3, 3, SensorBounds())
+    assert session.hypotheses and session.status == "localized"
+    assert {h.object for h in session.hypotheses} == {"a", "b"}
+
+
+def test_a_disc_is_one_class_whatever_its_rotation():
+    ring = [[30 * math.cos(k * math.pi / 32), 30 * math.sin(k * math.pi / 32)] for k in range(64)]
+    disc = object_from_dict({"name": "disc", "outline": ring})
+    _, session = touched([disc], 1, 3, SensorBounds())
+    thetas = {round(h.pose.theta, 6) for h in session.hypotheses}
+    assert len(thetas) > 1  # the rotations the contacts cannot fix
+    assert len({h.equivalence_class for h in session.hypotheses}) == 1
+
+
+def test_classes_do_not_chain():
+    # outlines 0.6 tau apart in a row: a chain links them all, classes must not
+    square = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+    stable = square.stable_poses[0]
+    tau = 1.0
+    xs = np.arange(6) * 0.3 * tau  # neighbours 0.3 tau apart: within tau/2 of each other
+    rings = [PosedRings.of(stable, np.zeros(len(xs)), np.column_stack([xs, np.zeros(len(xs))]))]
+    label = equivalence_classes(rings, np.arange(len(xs)), np.arange(len(xs)), tau)
+    for k in np.unique(label):
+        members = xs[label == k]
+        assert np.ptp(members) <= tau
+    assert len(np.unique(label)) > 1
+
+
+@pytest.mark.parametrize("name", ALL_SETS)
+def test_localized_names_the_true_object_and_bounds_the_true_outline(name):
+    """200 worlds drawn from the prior per set, four random hitting touches each at
+    1 mm / 3 degrees: whenever the session says localized, it is right."""
+    models = models_of(name)
+    localized = 0
+    for seed in range(200):
+        world, session = touched(models, 1000 + seed, 4)
+        if session.status != "localized":
+            continue
+        localized += 1
+        best = session.hypotheses[0]
+        true_poly = world.polygon()
+        named = session.models_by_name[best.object]
+        assert best.object == world.model.name or named.same_geometry(world.model)
+        bound = session.localization.bound
+        assert outline_gap(posed(session, best), true_poly) <= bound.eps_t / 2 + 1e-6
+        assert Accuracy.admits(session.accuracy, bound)
+    assert localized > 0
