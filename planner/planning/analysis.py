@@ -18,6 +18,7 @@ from planner.planning.candidate_generation import generate_candidates
 from planner.planning.candidates import Candidates
 from planner.planning.config import StrategyConfig
 from planner.planning.confusability import class_bits
+from planner.planning.feature_aims import feature_candidates
 from planner.planning.outcomes import Outcomes, predict_outcomes
 from planner.planning.posed_set import PosedSet, pose_hypotheses
 from planner.planning.probes import strategy_paths
@@ -86,6 +87,7 @@ def analyse(
     own = strategy_paths(
         config, hypotheses, by_name, posed, contacts, workspace, sensor, sensor_position, gen
     )
+    features = feature_candidates(posed, workspace, sensor, config.candidates.feature_paths)
     cands = generate_candidates(
         posed,
         workspace,
@@ -93,7 +95,13 @@ def analyse(
         config.candidates,
         gen,
         sensor_position=sensor_position,
-        extra=Candidates.concat([own, Candidates.from_paths(list(extra_paths))]),
+        extra=Candidates.concat(
+            [
+                own,
+                features,
+                Candidates.from_paths(list(extra_paths)),
+            ]
+        ),
     )
     fresh = np.flatnonzero(~repeated_paths(cands, observations, posed, sensor))
     if 0 < len(fresh) < len(cands):

@@ -46,7 +46,9 @@ class CandidateConfig:
     `oblique` (radians) the extra approach angles of boundary aims (0 and +-oblique);
     `angle_step` (radians) and `offset_step` (length; None = radius / 200) the
     dedupe resolution; `grid` the sample grid (per side) used to find IA points;
-    `face_samples` the points per face examined for differing boundaries.
+    `face_samples` the points per face examined for differing boundaries;
+    `feature_paths` caps the paths aimed at the features that tell the most
+    probable classes apart (:mod:`planner.planning.feature_aims`; 0: none).
     """
 
     count: int = 256
@@ -60,10 +62,11 @@ class CandidateConfig:
     offset_step: float | None = None
     grid: int = 24
     face_samples: int = 3
+    feature_paths: int = 64
 
     def __post_init__(self) -> None:
         names = ("count", "min_count", "origins", "intersection_aims", "boundary_aims")
-        for name in (*names, "face_samples", "full_size_hypotheses"):
+        for name in (*names, "face_samples", "full_size_hypotheses", "feature_paths"):
             if getattr(self, name) < 0:
                 raise PlannerError("must be >= 0", field=f"candidates.{name}")
         if self.grid < 2:

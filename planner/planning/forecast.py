@@ -25,17 +25,25 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from dataclasses import dataclass
 
 import numpy as np
 
+from planner.errors import InvalidObservationError
+from planner.planning.analysis import Analysis
 from planner.planning.budget import Deadline
-from planner.planning.outcomes import OutcomeConfig, predict_outcomes
+from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
 from planner.planning.result import Plan
 from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath
 
-__all__ = ["forecast_distinguishing", "with_forecast"]
+__all__ = [
+    "RecognitionRanking",
+    "forecast_distinguishing",
+    "recognition_ranking",
+    "with_forecast",
+]
 
 
 def forecast_distinguishing(
@@ -100,3 +108,76 @@ def with_forecast(
         paths[i] = dataclasses.replace(p, p_forecast=value)
     elapsed = plan.elapsed_ms + (time.perf_counter() - start) * 1000.0
     return dataclasses.replace(plan, paths=tuple(paths), elapsed_ms=elapsed)
+
+
+#: Most candidate paths, and most classes, the recognition is asked about when the
+#: outcome model calls every candidate uninformative (one update per pair).
+SHORTLIST = 8
+SHORTLIST_CLASSES = 4
+
+
+@dataclass(frozen=True, eq=False)
+class RecognitionRanking:
+    """What the recognition predicts of the shortlisted candidates `rows` (best
+    first): `p_distinguishing` (the class-weighted share of predicted outcomes that
+    leave one class) and `expected_classes` (classes left, class-weighted), against
+    the `current` number of classes."""
+
+    rows: np.ndarray
+    p_distinguishing: np.ndarray
+    expected_classes: np.ndarray
+    current: int
+
+
+def recognition_ranking(
+    session: Session, found: Analysis, deadline: Deadline | None = None
+) -> RecognitionRanking:
+    """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
+
+    Shortlist: paths aimed at the classes' differences first (one per feature
+    before the rest), then by the outcome model's P(informative) and motion. Each
+    of the most probable classes predicts its nominal outcome on a path with its
+    best member (the cast of the analysis); the session observes it; the classes left are counted.
+    ``E[classes] = sum_k w(k) classes(after k's outcome)``. The first path is
+    always judged, the rest while the `deadline` allows."""
+    deadline = deadline or Deadline()
+    posed, out, cands = found.posed, found.outcomes, found.candidates
+    current = posed.n_classes
+    # the paths aimed at the classes' differences in the order they were made (one
+    # per feature first), then the others by P(informative) and motion
+    feature = np.flatnonzero(cands.source == "feature")
+    other = np.flatnonzero(cands.source != "feature")
+    other = other[np.lexsort((found.motion[other], -found.info.p_informative[other]))]
+    shortlist = np.concatenate([feature, other])[:SHORTLIST]
+    top = np.argsort(-posed.class_weight, kind="stable")[:SHORTLIST_CLASSES]
+    weight = posed.class_weight[top] / posed.class_weight[top].sum()
+    best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
+    rows, p_dm, expected = [], [], []
+    for c in shortlist:
+        if rows and deadline.expired():
+            break
+        left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
+        left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
+        rows.append(int(c))
+        p_dm.append(float(weight @ (left == 1)))
+        expected.append(float(weight @ left))
+    rank = np.lexsort((np.array(expected), -np.array(p_dm))) if rows else np.zeros(0, int)
+    return RecognitionRanking(
+        np.array(rows, dtype=int)[rank],
+        np.array(p_dm)[rank],
+        np.array(expected)[rank],
+        current,
+    )
+
+
+def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:
+    """Classes left once the session observes hypothesis `h`'s nominal outcome on
+    candidate `c` (0 when the predicted observation is not a valid one)."""
+    contact = None
+    if out.hit[c, h]:
+        contact = Contact(tuple(out.point[c, h]), tuple(out.normal[c, h]))
+    try:
+        after = session.observe(Observation(path, contact)).hypotheses
+    except InvalidObservationError:
+        return 0
+    return len({g.equivalence_class for g in after})

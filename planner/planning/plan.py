@@ -14,6 +14,7 @@ radians.
 
 from __future__ import annotations
 
+import dataclasses
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -23,7 +24,7 @@ import numpy as np
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
 from planner.planning.budget import Deadline
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import with_forecast
+from planner.planning.forecast import recognition_ranking, with_forecast
 from planner.planning.probes import opening_probe
 from planner.planning.refinement import refinement, scores_after
 from planner.planning.result import REFINING, Plan, PlannedPath
@@ -64,6 +65,8 @@ def plan_session(
         config,
         rng,
         observations=session.observations,
+        localized=session.status == "localized",
+        session=session,
     )
     return with_forecast(result, session, config.forecast, config.budget_ms, config.outcome)
 
@@ -79,6 +82,8 @@ def plan(
     *,
     observations: Sequence[Observation] = (),
     extra_paths: Sequence[SensingPath] = (),
+    localized: bool | None = None,
+    session: Session | None = None,
 ) -> Plan:
     """Rank the next sensing paths for a hypothesis set (world frame).
 
@@ -89,10 +94,15 @@ def plan(
     time budget (`config.budget_ms`) covers the whole call.
 
     With no hypothesis and no contact the plan is the opening probe (status
-    ``awaiting_contact``); with one class left it is empty (``localized``);
-    with contacts but no hypothesis, empty (``inconsistent``); otherwise the
-    ranked informative paths (``ambiguous``), empty with a note when no
-    candidate is informative.
+    ``awaiting_contact``); with contacts but no hypothesis, empty
+    (``inconsistent``); when `localized` (by default: one class left), empty;
+    with one class left short of the session's accuracy, the paths that shrink
+    its bound (``refining``); otherwise the ranked informative paths
+    (``ambiguous``). When the outcome model calls no candidate informative, the
+    candidates are ranked on what the recognition of `session` predicts
+    (:func:`~planner.planning.forecast.recognition_ranking`), then refining paths
+    are offered; only when nothing can change the hypotheses is the plan empty,
+    with a note saying why.
     """
     start = time.perf_counter()
     config = config or StrategyConfig()
@@ -113,7 +123,7 @@ def plan(
         )
         return finish("awaiting_contact", (probe,))
     classes = len({h.equivalence_class for h in hypotheses})
-    if classes == 1:
+    if classes == 1 and localized is not False:
         return finish("localized", (), classes=1)
     found = analyse(
         hypotheses,
@@ -127,6 +137,12 @@ def plan(
         extra_paths=extra_paths,
         deadline=deadline,
     )
+    if classes == 1:  # one class, its bound short of the required accuracy
+        paths, note = _refining(
+            found, hypotheses, models_by_name(models), contacts, sensor, _no_ranking(found), config
+        )
+        note = note or "one class left; no path shrinks its bound further"
+        return finish("ambiguous", paths, truncated=found.truncated, note=note, classes=1)
     ranking = rank_candidates(
         found.table,
         config,
@@ -140,11 +156,10 @@ def plan(
     paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
     note = ranking.note
     if not paths:
-        paths, note = _refining(
-            found, hypotheses, models_by_name(models), contacts, sensor, ranking, config
-        )
-    if not paths and config.name == "thesis":
-        paths, note = _thesis_window(found, ranking, config, gen, note)
+        paths, note = _uninformative(
+            found, hypotheses, models_by_name(models), contacts, sensor, ranking, config, gen,
+            session, deadline,
+        )  # fmt: skip
     if found.truncated:
         note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
     return finish(
@@ -155,6 +170,34 @@ def plan(
         candidates=len(found.candidates),
         classes=found.table.n_classes,
     )
+
+
+def _uninformative(
+    found: Analysis,
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    contacts: Sequence[Contact],
+    sensor: SensorBounds,
+    ranking: Ranking,
+    config: StrategyConfig,
+    rng: np.random.Generator,
+    session: Session | None,
+    deadline: Deadline,
+) -> tuple[list[PlannedPath], str | None]:
+    """The outcome model calls no candidate informative. The thesis refines, then
+    takes its best window, as the thesis did; the other strategies rank on the
+    recognition's predictions (given a session), then refine."""
+    if config.name == "thesis":
+        paths, note = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+        if not paths:
+            paths, note = _thesis_window(found, ranking, config, rng, note)
+        return paths, note
+    paths, note = [], ranking.note
+    if session is not None:
+        paths, note = _by_recognition(found, session, ranking, config, deadline)
+    if not paths:
+        paths, note = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+    return paths, note
 
 
 def _thesis_window(
@@ -212,7 +255,8 @@ def _refining(
             )
         )
     note = (
-        f"{ranking.note}: refining the pose instead "
+        f"{ranking.note or 'one class left, its bound short of the required accuracy'}: "
+        "refining the pose instead "
         f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
     )
     return paths, note
@@ -244,3 +288,43 @@ def _planned(
         source=str(c.source[i]),
         expected_eps_t=None if expected_eps_t is None else float(expected_eps_t),
     )
+
+
+def _no_ranking(found: Analysis) -> Ranking:
+    """The ranking of a single class: nothing to tell apart, no touch left to count."""
+    n = len(found.candidates)
+    return Ranking(np.zeros(0, dtype=int), np.ones(n), np.ones(n, dtype=bool), False, None)
+
+
+def _by_recognition(
+    found: Analysis,
+    session: Session,
+    ranking: Ranking,
+    config: StrategyConfig,
+    deadline: Deadline,
+) -> tuple[list[PlannedPath], str | None]:
+    """No candidate informative for the outcome model: the shortlisted paths after
+    which the recognition predicts fewer classes, best first (P(DM) by the
+    recognition, then expected classes left), scored by the recognition."""
+    judged = recognition_ranking(session, found, deadline)
+    useful = judged.expected_classes < judged.current - 1e-9
+    paths = [
+        dataclasses.replace(
+            _planned(found, int(i), ranking, family="partial"),
+            p_forecast=float(p),
+            scored_by="recognition",
+        )
+        for i, p in zip(judged.rows[useful], judged.p_distinguishing[useful], strict=True)
+    ][: config.max_paths]
+    if not paths:
+        note = (
+            f"{ranking.note}; the recognition predicts {judged.current} classes after each "
+            f"of the {len(judged.rows)} paths it judged"
+        )
+        return [], note
+    note = (
+        f"{ranking.note}: ranked on the recognition's predictions (classes "
+        f"{judged.current} -> {judged.expected_classes[useful][0]:.2f} expected, "
+        f"P(DM) {judged.p_distinguishing[useful][0]:.2f})"
+    )
+    return paths, note

@@ -60,6 +60,7 @@ class PlannedPath:
     source: str = "general"
     expected_eps_t: float | None = None
     p_forecast: float | None = None
+    scored_by: str = "outcome_model"
 
     @property
     def path(self) -> SensingPath:

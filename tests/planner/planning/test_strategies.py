@@ -61,7 +61,9 @@ PATH_B = SensingPath((100.0, 0.0), (-1.0, 0.0), 100.0)
 
 @pytest.mark.parametrize("name", ["pdm", "lookahead", "optimal"])
 def test_fig71_geometric(name):
-    config = StrategyConfig(name=name, candidates=CandidateConfig(count=0), budget_ms=None)
+    config = StrategyConfig(
+        name=name, candidates=CandidateConfig(count=0, feature_paths=0), budget_ms=None
+    )
     result = plan(
         FIG71, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config, extra_paths=[PATH_A, PATH_B]
     )
@@ -333,7 +335,7 @@ def test_budget_covers_the_outcome_model():
 
 @pytest.mark.parametrize("name", ["pdm", "lookahead", "optimal"])
 def test_no_candidate_at_all(name):
-    none = CandidateConfig(count=0, boundary_aims=0, intersection_aims=0)
+    none = CandidateConfig(count=0, boundary_aims=0, intersection_aims=0, feature_paths=0)
     result = plan(
         FIG71, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), StrategyConfig(name=name, candidates=none)
     )
