@@ -21,7 +21,13 @@ import numpy as np
 import pydantic_core
 
 from app.store import SessionRecord
-from planner.codec import observation_from_dict, observation_to_dict, plan_to_dict, session_to_dict
+from planner.codec import (
+    accuracy_from_dict,
+    observation_from_dict,
+    observation_to_dict,
+    plan_to_dict,
+    session_to_dict,
+)
 from planner.models.library import object_from_dict
 from planner.planning.config import StrategyConfig
 from planner.planning.result import Plan
@@ -72,6 +78,7 @@ def build_session(record: SessionRecord) -> Session:
         Workspace(tuple(cfg["workspace"]["center"]), cfg["workspace"]["radius"]),
         RecognitionConfig(max_outliers=cfg["max_outliers"]),
         [observation_from_dict(o) for o in record.observations],
+        accuracy=accuracy_from_dict(cfg.get("accuracy")),
     )
 
 

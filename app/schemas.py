@@ -132,6 +132,28 @@ class StrategyOut(BaseModel):
     seed: int | None = None
 
 
+class AccuracyOut(BaseModel):
+    """What `localized` requires: the pose bounds at most these."""
+
+    translation: float = Field(description="length")
+    rotation: float = Field(description="radians")
+
+
+class LocalizationOut(BaseModel):
+    """How far the session is from `localized` (one class AND its bound within the
+    accuracy): the classes left, the most probable class' bound, what is missing."""
+
+    classes: int = Field(ge=0)
+    bound: ErrorBoundOut | None = Field(
+        description="the most probable class' bound: its widest member's, widened by the "
+        "symmetry tolerance; null without a hypothesis"
+    )
+    missing: list[Literal["one_class", "accuracy"]] = Field(
+        description="empty when localized; one_class while several classes are left, "
+        "accuracy while the bound exceeds the session's accuracy"
+    )
+
+
 class SessionOut(BaseModel):
     """A session's state: its configuration, observations and hypotheses (most probable
     first; `hypothesis_count` is the length before any ``?limit=``)."""
@@ -149,6 +171,8 @@ class SessionOut(BaseModel):
     hypotheses: list[HypothesisOut]
     hypothesis_count: int = Field(ge=0)
     class_count: int = Field(ge=0, description="equivalence classes left")
+    accuracy: AccuracyOut
+    localization: LocalizationOut
 
 
 class PlannedPathOut(BaseModel):
@@ -179,6 +203,12 @@ class PlannedPathOut(BaseModel):
         "class' predicted outcome observed); set on the first `strategy.forecast` "
         "paths, None elsewhere. p_distinguishing is the outcome model's worst-case "
         "value: sure where it says 1, lower than what happens elsewhere",
+    )
+    scored_by: Literal["outcome_model", "recognition"] = Field(
+        default="outcome_model",
+        description="which model ranked the path: the worst-case outcome model (its "
+        "p_distinguishing = 1 is a certificate), or, when that model calls nothing "
+        "informative, the recognition's own predictions (p_forecast)",
     )
 
 
@@ -359,6 +389,15 @@ def _session_create(
         center: t.Vec2 = Field(default_factory=lambda: [0.0, 0.0])
         radius: Annotated[float, Field(gt=0, le=big)] = 200.0
 
+    class AccuracyIn(BaseModel):
+        """What `localized` requires: the pose's translation bound (length) and
+        rotation bound (radians) at most these. Default: 5 position errors plus 2% of
+        the largest object's diameter, and twice the normal error plus 0.02 rad."""
+
+        model_config = ConfigDict(extra="forbid", title="AccuracyIn")
+        translation: Annotated[float, Field(gt=0, le=big)]
+        rotation: Annotated[float, Field(gt=0, le=math.pi)]
+
     ObjectRef = Annotated[
         Annotated[t.Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],
         Discriminator(_object_or_name),
@@ -379,6 +418,9 @@ def _session_create(
         )
         strategy: StrategyIn = Field(default_factory=StrategyIn)
         max_outliers: Annotated[int, Field(ge=0, le=settings.max_outliers)] = 0
+        accuracy: AccuracyIn | None = Field(
+            None, description="what `localized` requires; default fitted to the sensor"
+        )
 
     return SessionCreate
 

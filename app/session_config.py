@@ -14,7 +14,7 @@ from typing import Any
 
 from app.convert import strategy_config
 from app.errors import InvalidInputError
-from planner.codec import sensor_to_dict, workspace_to_dict
+from planner.codec import accuracy_from_dict, accuracy_to_dict, sensor_to_dict, workspace_to_dict
 from planner.models.library import object_from_dict, object_to_dict
 from planner.types import ObjectModel, SensorBounds, Workspace
 
@@ -68,5 +68,8 @@ def session_config(body: Mapping[str, Any], models: Sequence[ObjectModel]) -> di
         "strategy": dict(body["strategy"]),
         "max_outliers": body["max_outliers"],
     }
+    accuracy = accuracy_from_dict(body.get("accuracy"))  # the planner's own checks
+    if accuracy is not None:
+        cfg["accuracy"] = accuracy_to_dict(accuracy)
     strategy_config(cfg)  # the planner's own checks
     return cfg

@@ -29,6 +29,7 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
 from planner.types import (
+    Accuracy,
     Contact,
     Hypothesis,
     Observation,
@@ -39,12 +40,15 @@ from planner.types import (
 
 if TYPE_CHECKING:
     from planner.planning.result import Plan, PlannedPath
-    from planner.recognition.session import Session
+    from planner.recognition.session import Localization, Session
 
 __all__ = [
     "NormalZ",
+    "accuracy_from_dict",
+    "accuracy_to_dict",
     "contact_to_dict",
     "hypothesis_to_dict",
+    "localization_to_dict",
     "observation_from_dict",
     "observation_to_dict",
     "path_to_dict",
@@ -202,7 +206,35 @@ def session_to_dict(
         "hypotheses": [hypothesis_to_dict(h) for h in shown],
         "hypothesis_count": len(hyps),
         "class_count": len({h.equivalence_class for h in hyps}),
+        "accuracy": accuracy_to_dict(session.accuracy),
+        "localization": localization_to_dict(session.localization),
     }
+
+
+def accuracy_to_dict(accuracy: Accuracy) -> dict[str, Any]:
+    """``{"translation": length, "rotation": radians}``: what `localized` requires."""
+    return {"translation": float(accuracy.translation), "rotation": float(accuracy.rotation)}
+
+
+def accuracy_from_dict(data: Mapping[str, Any] | None) -> Accuracy | None:
+    """The accuracy of its JSON form (None: the session's default)."""
+    if data is None:
+        return None
+    return Accuracy(float(data["translation"]), float(data["rotation"]))
+
+
+def localization_to_dict(loc: Localization) -> dict[str, Any]:
+    """How far the session is from `localized`: classes left, the most probable
+    class' bound (null without a hypothesis), and what is missing (``one_class``,
+    ``accuracy``)."""
+    bound = None
+    if loc.bound is not None:
+        bound = {
+            "translation": _bounded(loc.bound.translation),
+            "rotation": _bounded(loc.bound.rotation),
+            "eps_t": _bounded(loc.bound.eps_t),
+        }
+    return {"classes": int(loc.classes), "bound": bound, "missing": list(loc.missing)}
 
 
 # -- plans ------------------------------------------------------------------------------------
@@ -222,6 +254,7 @@ def planned_path_to_dict(p: PlannedPath) -> dict[str, Any]:
         "source": None if p.source is None else str(p.source),
         "expected_eps_t": _optional(p.expected_eps_t),
         "p_forecast": _optional(p.p_forecast),
+        "scored_by": str(p.scored_by),
     }
 
 

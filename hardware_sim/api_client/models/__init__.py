@@ -1,5 +1,7 @@
 """ Contains all the data models used in inputs/outputs """
 
+from .accuracy_in import AccuracyIn
+from .accuracy_out import AccuracyOut
 from .contact_in import ContactIn
 from .contact_out import ContactOut
 from .error_bound_out import ErrorBoundOut
@@ -9,6 +11,8 @@ from .get_image_svg_view import GetImageSvgView
 from .health import Health
 from .hypothesis_out import HypothesisOut
 from .import_mesh_file_type import ImportMeshFileType
+from .localization_out import LocalizationOut
+from .localization_out_missing_item import LocalizationOutMissingItem
 from .object_created import ObjectCreated
 from .object_in import ObjectIn
 from .object_list import ObjectList
@@ -20,6 +24,7 @@ from .path_out import PathOut
 from .plan_out import PlanOut
 from .plan_out_status import PlanOutStatus
 from .planned_path_out import PlannedPathOut
+from .planned_path_out_scored_by import PlannedPathOutScoredBy
 from .pose_out import PoseOut
 from .problem import Problem
 from .sensor_in import SensorIn
@@ -36,6 +41,8 @@ from .workspace_in import WorkspaceIn
 from .workspace_out import WorkspaceOut
 
 __all__ = (
+    "AccuracyIn",
+    "AccuracyOut",
     "ContactIn",
     "ContactOut",
     "ErrorBoundOut",
@@ -45,6 +52,8 @@ __all__ = (
     "Health",
     "HypothesisOut",
     "ImportMeshFileType",
+    "LocalizationOut",
+    "LocalizationOutMissingItem",
     "ObjectCreated",
     "ObjectIn",
     "ObjectList",
@@ -54,6 +63,7 @@ __all__ = (
     "PathIn",
     "PathOut",
     "PlannedPathOut",
+    "PlannedPathOutScoredBy",
     "PlanOut",
     "PlanOutStatus",
     "PoseOut",

@@ -8,6 +8,7 @@ from attrs import field as _attrs_field
 
 from ..types import UNSET, Unset
 
+from ..models.planned_path_out_scored_by import PlannedPathOutScoredBy
 from ..types import UNSET, Unset
 from typing import cast
 
@@ -40,6 +41,9 @@ class PlannedPathOut:
             p_forecast (float | None | Unset): P(DM) as the recognition itself would judge the touch (each class' predicted
                 outcome observed); set on the first `strategy.forecast` paths, None elsewhere. p_distinguishing is the outcome
                 model's worst-case value: sure where it says 1, lower than what happens elsewhere
+            scored_by (PlannedPathOutScoredBy | Unset): which model ranked the path: the worst-case outcome model (its
+                p_distinguishing = 1 is a certificate), or, when that model calls nothing informative, the recognition's own
+                predictions (p_forecast) Default: PlannedPathOutScoredBy.OUTCOME_MODEL.
             source (None | str | Unset):
      """
 
@@ -55,6 +59,7 @@ class PlannedPathOut:
     p_informative: float
     expected_eps_t: float | None | Unset = UNSET
     p_forecast: float | None | Unset = UNSET
+    scored_by: PlannedPathOutScoredBy | Unset = PlannedPathOutScoredBy.OUTCOME_MODEL
     source: None | str | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
@@ -103,6 +108,11 @@ class PlannedPathOut:
         else:
             p_forecast = self.p_forecast
 
+        scored_by: str | Unset = UNSET
+        if not isinstance(self.scored_by, Unset):
+            scored_by = self.scored_by.value
+
+
         source: None | str | Unset
         if isinstance(self.source, Unset):
             source = UNSET
@@ -128,6 +138,8 @@ class PlannedPathOut:
             field_dict["expected_eps_t"] = expected_eps_t
         if p_forecast is not UNSET:
             field_dict["p_forecast"] = p_forecast
+        if scored_by is not UNSET:
+            field_dict["scored_by"] = scored_by
         if source is not UNSET:
             field_dict["source"] = source
 
@@ -193,6 +205,16 @@ class PlannedPathOut:
         p_forecast = _parse_p_forecast(d.pop("p_forecast", UNSET))
 
 
+        _scored_by = d.pop("scored_by", UNSET)
+        scored_by: PlannedPathOutScoredBy | Unset
+        if isinstance(_scored_by,  Unset):
+            scored_by = UNSET
+        else:
+            scored_by = PlannedPathOutScoredBy(_scored_by)
+
+
+
+
         def _parse_source(data: object) -> None | str | Unset:
             if data is None:
                 return data
@@ -216,6 +238,7 @@ class PlannedPathOut:
             p_informative=p_informative,
             expected_eps_t=expected_eps_t,
             p_forecast=p_forecast,
+            scored_by=scored_by,
             source=source,
         )
 

@@ -12,6 +12,7 @@ from ..types import UNSET, Unset
 from typing import cast
 
 if TYPE_CHECKING:
+  from ..models.accuracy_in import AccuracyIn
   from ..models.object_in import ObjectIn
   from ..models.sensor_in import SensorIn
   from ..models.strategy_in import StrategyIn
@@ -32,6 +33,7 @@ class SessionCreate:
 
         Attributes:
             objects (list[ObjectIn | str]):
+            accuracy (AccuracyIn | None | Unset): what `localized` requires; default fitted to the sensor
             max_outliers (int | Unset):  Default: 0.
             sensor (SensorIn | Unset): Bounded sensor errors: contact position (length) and normal angle (radians).
             sensor_position (list[float] | None | Unset): default: the point of the safe circle on its +x axis
@@ -40,6 +42,7 @@ class SessionCreate:
      """
 
     objects: list[ObjectIn | str]
+    accuracy: AccuracyIn | None | Unset = UNSET
     max_outliers: int | Unset = 0
     sensor: SensorIn | Unset = UNSET
     sensor_position: list[float] | None | Unset = UNSET
@@ -51,6 +54,7 @@ class SessionCreate:
 
 
     def to_dict(self) -> dict[str, Any]:
+        from ..models.accuracy_in import AccuracyIn # noqa: PLC0415
         from ..models.object_in import ObjectIn # noqa: PLC0415
         from ..models.sensor_in import SensorIn # noqa: PLC0415
         from ..models.strategy_in import StrategyIn # noqa: PLC0415
@@ -65,6 +69,14 @@ class SessionCreate:
             objects.append(objects_item)
 
 
+
+        accuracy: dict[str, Any] | None | Unset
+        if isinstance(self.accuracy, Unset):
+            accuracy = UNSET
+        elif isinstance(self.accuracy, AccuracyIn):
+            accuracy = self.accuracy.to_dict()
+        else:
+            accuracy = self.accuracy
 
         max_outliers = self.max_outliers
 
@@ -96,6 +108,8 @@ class SessionCreate:
         field_dict.update({
             "objects": objects,
         })
+        if accuracy is not UNSET:
+            field_dict["accuracy"] = accuracy
         if max_outliers is not UNSET:
             field_dict["max_outliers"] = max_outliers
         if sensor is not UNSET:
@@ -113,6 +127,7 @@ class SessionCreate:
 
     @classmethod
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        from ..models.accuracy_in import AccuracyIn # noqa: PLC0415
         from ..models.object_in import ObjectIn # noqa: PLC0415
         from ..models.sensor_in import SensorIn # noqa: PLC0415
         from ..models.strategy_in import StrategyIn # noqa: PLC0415
@@ -137,6 +152,26 @@ class SessionCreate:
             objects_item = _parse_objects_item(objects_item_data)
 
             objects.append(objects_item)
+
+
+        def _parse_accuracy(data: object) -> AccuracyIn | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, dict):
+                    raise TypeError()
+                accuracy_type_0 = AccuracyIn.from_dict(data)
+
+
+
+                return accuracy_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(AccuracyIn | None | Unset, data)
+
+        accuracy = _parse_accuracy(d.pop("accuracy", UNSET))
 
 
         max_outliers = d.pop("max_outliers", UNSET)
@@ -191,6 +226,7 @@ class SessionCreate:
 
         session_create = cls(
             objects=objects,
+            accuracy=accuracy,
             max_outliers=max_outliers,
             sensor=sensor,
             sensor_position=sensor_position,

@@ -12,7 +12,9 @@ from ..models.session_out_status import SessionOutStatus
 from typing import cast
 
 if TYPE_CHECKING:
+  from ..models.accuracy_out import AccuracyOut
   from ..models.hypothesis_out import HypothesisOut
+  from ..models.localization_out import LocalizationOut
   from ..models.observation_out import ObservationOut
   from ..models.sensor_out import SensorOut
   from ..models.strategy_out import StrategyOut
@@ -32,10 +34,13 @@ class SessionOut:
     first; `hypothesis_count` is the length before any ``?limit=``).
 
         Attributes:
+            accuracy (AccuracyOut): What `localized` requires: the pose bounds at most these.
             class_count (int): equivalence classes left
             hypotheses (list[HypothesisOut]):
             hypothesis_count (int):
             id (str):
+            localization (LocalizationOut): How far the session is from `localized` (one class AND its bound within the
+                accuracy): the classes left, the most probable class' bound, what is missing.
             max_outliers (int):
             objects (list[str]):
             observations (list[ObservationOut]):
@@ -47,10 +52,12 @@ class SessionOut:
             workspace (WorkspaceOut):
      """
 
+    accuracy: AccuracyOut
     class_count: int
     hypotheses: list[HypothesisOut]
     hypothesis_count: int
     id: str
+    localization: LocalizationOut
     max_outliers: int
     objects: list[str]
     observations: list[ObservationOut]
@@ -67,11 +74,15 @@ class SessionOut:
 
 
     def to_dict(self) -> dict[str, Any]:
+        from ..models.accuracy_out import AccuracyOut # noqa: PLC0415
         from ..models.hypothesis_out import HypothesisOut # noqa: PLC0415
+        from ..models.localization_out import LocalizationOut # noqa: PLC0415
         from ..models.observation_out import ObservationOut # noqa: PLC0415
         from ..models.sensor_out import SensorOut # noqa: PLC0415
         from ..models.strategy_out import StrategyOut # noqa: PLC0415
         from ..models.workspace_out import WorkspaceOut # noqa: PLC0415
+        accuracy = self.accuracy.to_dict()
+
         class_count = self.class_count
 
         hypotheses = []
@@ -84,6 +95,8 @@ class SessionOut:
         hypothesis_count = self.hypothesis_count
 
         id = self.id
+
+        localization = self.localization.to_dict()
 
         max_outliers = self.max_outliers
 
@@ -116,10 +129,12 @@ class SessionOut:
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
         field_dict.update({
+            "accuracy": accuracy,
             "class_count": class_count,
             "hypotheses": hypotheses,
             "hypothesis_count": hypothesis_count,
             "id": id,
+            "localization": localization,
             "max_outliers": max_outliers,
             "objects": objects,
             "observations": observations,
@@ -137,12 +152,19 @@ class SessionOut:
 
     @classmethod
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        from ..models.accuracy_out import AccuracyOut # noqa: PLC0415
         from ..models.hypothesis_out import HypothesisOut # noqa: PLC0415
+        from ..models.localization_out import LocalizationOut # noqa: PLC0415
         from ..models.observation_out import ObservationOut # noqa: PLC0415
         from ..models.sensor_out import SensorOut # noqa: PLC0415
         from ..models.strategy_out import StrategyOut # noqa: PLC0415
         from ..models.workspace_out import WorkspaceOut # noqa: PLC0415
         d = dict(src_dict)
+        accuracy = AccuracyOut.from_dict(d.pop("accuracy"))
+
+
+
+
         class_count = d.pop("class_count")
 
         hypotheses = []
@@ -158,6 +180,11 @@ class SessionOut:
         hypothesis_count = d.pop("hypothesis_count")
 
         id = d.pop("id")
+
+        localization = LocalizationOut.from_dict(d.pop("localization"))
+
+
+
 
         max_outliers = d.pop("max_outliers")
 
@@ -200,10 +227,12 @@ class SessionOut:
 
 
         session_out = cls(
+            accuracy=accuracy,
             class_count=class_count,
             hypotheses=hypotheses,
             hypothesis_count=hypothesis_count,
             id=id,
+            localization=localization,
             max_outliers=max_outliers,
             objects=objects,
             observations=observations,
