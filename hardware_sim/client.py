@@ -37,7 +37,15 @@ from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
-from planner.types import ObjectModel, Observation, Pose, SensingPath, SensorBounds, Workspace
+from planner.types import (
+    ObjectModel,
+    Observation,
+    Pose,
+    SensingPath,
+    SensorBounds,
+    StablePose,
+    Workspace,
+)
 
 __all__ = [
     "Advice",
@@ -260,16 +268,21 @@ def run_recognition(
 def outline_distance(
     models: Sequence[ObjectModel], estimate: Estimate, name: str, stable_pose: int, pose: Pose
 ) -> float:
-    """Hausdorff distance (length) between the vertex sets of the estimate's posed
-    outline and the true one (symmetric equivalents give 0); inf for another
-    object or another vertex count."""
+    """Hausdorff distance (length) between the boundaries of the estimate's posed
+    outline and the true one, holes included (symmetric equivalents give 0); inf
+    for another object. Measured along the boundaries, not between vertex sets: a
+    curved part turned by part of a face's angle keeps its outline while its
+    vertices move."""
+    import shapely
+
     by_name = {m.name: m for m in models}
     if estimate.object != name:
         return math.inf
-    est = by_name[name].stable_poses[estimate.stable_pose]
-    true = by_name[name].stable_poses[stable_pose]
-    if len(est.outline) != len(true.outline):
-        return math.inf
-    a, b = estimate.pose.apply(est.outline), pose.apply(true.outline)
-    d = np.hypot(*(a[:, None, :] - b[None, :, :]).transpose(2, 0, 1))
-    return float(max(d.min(axis=1).max(), d.min(axis=0).max()))
+
+    def polygon(stable: StablePose, at: Pose) -> shapely.Polygon:
+        return shapely.Polygon(at.apply(stable.outline), [at.apply(h) for h in stable.holes])
+
+    est = polygon(by_name[name].stable_poses[estimate.stable_pose], estimate.pose)
+    true = polygon(by_name[name].stable_poses[stable_pose], pose)
+    # every face split in 20 for the measure
+    return float(shapely.hausdorff_distance(est.boundary, true.boundary, densify=0.05))
