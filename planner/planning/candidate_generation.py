@@ -62,7 +62,7 @@ class CandidateConfig:
     offset_step: float | None = None
     grid: int = 24
     face_samples: int = 3
-    feature_paths: int = 64
+    feature_paths: int = 24
 
     def __post_init__(self) -> None:
         names = ("count", "min_count", "origins", "intersection_aims", "boundary_aims")

@@ -69,7 +69,7 @@ def _wall_normal(outline: shapely.Polygon, point: shapely.Point) -> np.ndarray |
 
 
 def feature_candidates(
-    posed: PosedSet, workspace: Workspace, sensor: SensorBounds, limit: int = 64
+    posed: PosedSet, workspace: Workspace, sensor: SensorBounds, limit: int = 24
 ) -> Candidates:
     """At most `limit` paths (source ``feature``) aimed at the regions where the
     most probable classes' outlines differ by more than the contact error can hide.

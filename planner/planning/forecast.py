@@ -102,6 +102,8 @@ def with_forecast(
     deadline = Deadline.after_ms(left)
     paths = list(plan.paths)
     for i, p in enumerate(paths[:count]):
+        if p.p_forecast is not None:  # ranked by the recognition: forecast already
+            continue
         value = forecast_distinguishing(session, p.path, deadline, config)
         if value is None:
             break

@@ -308,13 +308,16 @@ def _by_recognition(
     recognition, then expected classes left), scored by the recognition."""
     judged = recognition_ranking(session, found, deadline)
     useful = judged.expected_classes < judged.current - 1e-9
+    # the recognition's P(DM) is the forecast of the first `config.forecast` paths
     paths = [
         dataclasses.replace(
             _planned(found, int(i), ranking, family="partial"),
-            p_forecast=float(p),
+            p_forecast=float(p) if k < config.forecast else None,
             scored_by="recognition",
         )
-        for i, p in zip(judged.rows[useful], judged.p_distinguishing[useful], strict=True)
+        for k, (i, p) in enumerate(
+            zip(judged.rows[useful], judged.p_distinguishing[useful], strict=True)
+        )
     ][: config.max_paths]
     if not paths:
         note = (
