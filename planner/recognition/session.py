@@ -228,7 +228,7 @@ class Session:
         out.sort(key=lambda h: (-h.probability, h.equivalence_class))
         return out
 
-    @property
+    @cached_property
     def symmetry_tolerance(self) -> float:
         """``tau``: posed outlines closer than this are one equivalence class (DESIGN
         §2): ``2 eps_d``, fixed by the sensor; with the thesis' fixed error disk, half

@@ -402,6 +402,30 @@ def test_plan_when_localized_is_empty(client):
     assert plan["status"] == "localized" and plan["paths"] == []
 
 
+def test_a_required_accuracy_holds_back_localized_and_the_plan_refines(client):
+    # the square touched twice, exactly: one class; an accuracy tighter than the
+    # bound the two contacts leave keeps the session ambiguous and the plan refining
+    loose = create_session(client, objects=[SQUARE])
+    strict = create_session(
+        client, objects=[SQUARE], accuracy={"translation": 1e-3, "rotation": 1e-3}
+    )
+    assert strict["accuracy"] == {"translation": 1e-3, "rotation": 1e-3}
+    for s in (loose, strict):
+        for obs in (BOTTOM, RIGHT):
+            client.post(f"/v1/sessions/{s['id']}/observations", json=obs)
+    done = client.get(f"/v1/sessions/{loose['id']}").json()
+    assert done["status"] == "localized" and done["localization"]["missing"] == []
+    state = client.get(f"/v1/sessions/{strict['id']}").json()
+    assert state["status"] == "ambiguous" and state["localization"]["missing"] == ["accuracy"]
+    assert state["localization"]["classes"] == 1
+    assert state["localization"]["bound"]["translation"] > 1e-3
+    plan = client.get(f"/v1/sessions/{strict['id']}/plan").json()
+    assert plan["status"] == "ambiguous" and plan["classes"] == 1
+    assert plan["paths"] or "no path shrinks" in plan["note"]
+    bad = client.post("/v1/sessions", json={"objects": [SQUARE], "accuracy": {"rotation": 0.1}})
+    assert is_problem(bad, 422) and "accuracy" in bad.text
+
+
 def test_pictures_svg_and_png(client):
     s = create_session(client)
     url = f"/v1/sessions/{s['id']}"
