@@ -14,10 +14,12 @@ from collections.abc import AsyncIterator
 from contextlib import asynccontextmanager
 from typing import Any
 
+import anyio
 import structlog
 from fastapi import FastAPI
 from fastapi.routing import APIRoute
 
+from app import migrations
 from app.errors import PROBLEM_MEDIA_TYPE, install_error_handlers
 from app.observability import (
     BodyLimitMiddleware,
@@ -29,7 +31,7 @@ from app.routes import health, objects, observations, pictures, plan, sessions, 
 from app.schemas import input_models
 from app.service import SessionService
 from app.settings import Settings
-from app.store import Store
+from app.store import Store, StoreUnavailableError
 
 __all__ = ["TactileAPI", "create_app"]
 
@@ -46,21 +48,46 @@ def operation_id(route: APIRoute) -> str:
 async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     settings: Settings = app.state.settings
     store = Store(
-        settings.db_path,
+        settings.database,
         busy_timeout_ms=settings.busy_timeout_ms,
         synchronous=settings.sqlite_synchronous,
         pool_size=settings.db_pool_size,
     )
     service = SessionService(settings, store)
-    await service.run_db(store.open, settings.idempotency_ttl_s)
+    before = await service.run_db(store.open)
     app.state.service = service
-    log.info("service started", db=str(settings.db_path), cpu_workers=settings.cpu_workers)
-    try:
-        yield
-    finally:
-        app.state.service = None
-        await service.run_db(store.close)
+    log.info(
+        "service started",
+        db=store.describe(),
+        schema=migrations.head(),
+        migrated_from=before,
+        cpu_workers=settings.cpu_workers,
+    )
+    async with anyio.create_task_group() as tasks:
+        tasks.start_soon(_retention, service)
+        try:
+            yield
+        finally:
+            tasks.cancel_scope.cancel()
+            app.state.service = None
+            await service.run_db(store.close)
         log.info("service stopped")
+
+
+async def _retention(service: SessionService) -> None:
+    """Purge expired idempotency records and idle sessions now and on a schedule (one
+    host at a time: the store skips a round another host is running)."""
+    settings = service.settings
+    while True:
+        try:
+            removed = await service.run_db(
+                service.store.purge, settings.idempotency_ttl_s, settings.session_ttl_s
+            )
+            if removed and any(removed.values()):
+                log.info("retention", **removed)
+        except StoreUnavailableError as exc:
+            log.warning("retention skipped", error=str(exc))
+        await anyio.sleep(settings.retention_interval_s)
 
 
 def _problem_media_types(schema: dict[str, Any]) -> dict[str, Any]:

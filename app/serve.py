@@ -71,6 +71,13 @@ def _metrics_dir(workers: int) -> None:
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
 
 
+def database_label(target: str) -> str:
+    """The database for a log line: a URL without its password."""
+    from app.store import database_url
+
+    return database_url(target).render_as_string(hide_password=True)
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     import structlog
     import uvicorn
@@ -80,7 +87,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from app.settings import Settings
 
     if args.db is not None:
-        os.environ["TACTILE_DB_PATH"] = str(Path(args.db).expanduser().resolve())
+        from app.store import database_url, is_url
+
+        database_url(args.db)  # refuse what no backend takes before anything starts
+        db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())
+        os.environ["TACTILE_DB"] = db
     settings = Settings()
     configure_logging(settings.log_level, settings.log_json)
     _metrics_dir(args.workers)
@@ -92,7 +103,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         host=host,
         port=port,
         workers=args.workers,
-        db=str(settings.db_path),
+        db=database_label(settings.database),
         url=f"http://{host}:{port}",
     )
     if args.workers > 1:
@@ -162,6 +173,9 @@ def add_serve_command(subparsers: Any) -> None:
     serve.add_argument("--port", type=int, default=8000, help="0: any free port (logged)")
     serve.add_argument("--workers", type=_positive, default=1, help="worker processes")
     serve.add_argument(
-        "--db", default=None, help="SQLite file (default: TACTILE_DB_PATH, else ./tactile.db)"
+        "--db",
+        default=None,
+        help="a SQLite file or a postgresql://user:pass@host:port/db URL"
+        " (default: TACTILE_DB, else TACTILE_DB_PATH, else ./tactile.db)",
     )
     serve.set_defaults(func=cmd_serve)

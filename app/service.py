@@ -56,6 +56,7 @@ from app.store import (
     IdempotentWrite,
     SessionGoneError,
     SessionRecord,
+    Snapshot,
     Store,
     StoredResponse,
     VersionConflictError,
@@ -66,6 +67,7 @@ from planner.models.library import object_from_dict, object_to_dict
 from planner.planning.plan import plan_session
 from planner.planning.result import Plan
 from planner.recognition.session import Session
+from planner.recognition.snapshot import code_version, restore, snapshot
 
 __all__ = ["Answer", "SessionService"]
 
@@ -89,10 +91,24 @@ def _next_state(
     current: Session,
     step: Callable[[SessionRecord, Session], Session],
     limit: int | None,
-) -> tuple[Session, bytes]:
-    """The session after `step`, derived, and its JSON at the next version (in a thread)."""
+) -> tuple[Session, bytes, Snapshot]:
+    """The session after `step`, derived, its JSON at the next version and its snapshot
+    (in a thread)."""
     new = derive(step(record, current))
-    return new, session_json(record.id, record.version + 1, record.config, new, limit)
+    body = session_json(record.id, record.version + 1, record.config, new, limit)
+    return new, body, Snapshot(code_version(), snapshot(new))
+
+
+def _resume(base: Session | None, stored: bytes | None, record: SessionRecord) -> Session:
+    """The record's derived session from the better of an in-memory base and a stored
+    snapshot (one whose observations begin the record's), extended by the rest."""
+    restored = restore(stored) if stored is not None else None
+    newer = restored is not None and (
+        base is None or len(restored.observations) > len(base.observations)
+    )
+    if newer and extends(restored, record):
+        base = restored
+    return derive(catch_up(base, record))
 
 
 class SessionService:
@@ -157,15 +173,21 @@ class SessionService:
     async def _session(self, record: SessionRecord) -> Session:
         """The derived session of a record (cached per version; caller holds the lock).
 
-        On a miss (another worker process wrote the newer versions, or this one
-        restarted) the newest cached version of the session whose observations
-        begin the record's is extended by the missing ones instead of re-deriving
-        the whole tree from the first observation."""
+        On a miss (another worker process or host wrote the newer versions, or this
+        one restarted) the newest of the cached versions and the stored snapshots
+        whose observations begin the record's is extended by the missing ones,
+        instead of re-deriving the whole tree from the first observation."""
         key = (record.id, record.version)
         session = self.sessions.get(key)
         if session is None:
             base = self._newest_prefix(record)
-            session = await self.run_cpu(lambda: derive(catch_up(base, record)))
+            n = len(record.observations)
+            stored = None
+            if base is None or len(base.observations) < n:  # another host may have it
+                found = await self.run_db(self.store.get_snapshot, record.id, code_version(), n)
+                if found is not None and (base is None or found[0] > len(base.observations)):
+                    stored = found[1]
+            session = await self.run_cpu(_resume, base, stored, record)
             self.sessions.put(key, session)
         return session
 
@@ -254,7 +276,7 @@ class SessionService:
         fp: str,
         if_match: str | None,
         step: Callable[[SessionRecord, Session], Session],
-        write: Callable[[SessionRecord, IdempotentWrite | None], StoredResponse | None],
+        write: Callable[[SessionRecord, IdempotentWrite | None, Snapshot], StoredResponse | None],
         status: int,
         limit: int | None,
     ) -> Answer:
@@ -274,11 +296,11 @@ class SessionService:
                         )
                     current = await self._session(record)
                     version = record.version + 1
-                    new, body = await self.run_cpu(_next_state, record, current, step, limit)
+                    new, body, snap = await self.run_cpu(_next_state, record, current, step, limit)
                     answer = Answer(status, body, {"ETag": etag(version)})
                     idem = self._idem(scope, idem_key, fp, answer)
                     try:
-                        old = await self.run_db(write, record, idem)
+                        old = await self.run_db(write, record, idem, snap)
                     except VersionConflictError as exc:
                         if if_match is not None:
                             raise PreconditionFailedError(
@@ -316,8 +338,10 @@ class SessionService:
                 )
             return session.observe(observation)
 
-        def write(record: SessionRecord, idem: IdempotentWrite | None) -> StoredResponse | None:
-            return self.store.append_observation(session_id, record.version, stored, idem)
+        def write(
+            record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot
+        ) -> StoredResponse | None:
+            return self.store.append_observation(session_id, record.version, stored, idem, snap)
 
         return await self._mutate(
             session_id, f"sessions/{session_id}/observations", idem_key, fp, if_match, step,
@@ -337,7 +361,10 @@ class SessionService:
                 raise ConflictError("the session has no observation to undo", field="observations")
             return session.undo()
 
-        def write(record: SessionRecord, idem: IdempotentWrite | None) -> StoredResponse | None:
+        def write(
+            record: SessionRecord, idem: IdempotentWrite | None, _snap: Snapshot
+        ) -> StoredResponse | None:
+            # the undone state's snapshot is kept (the one before the last): not written
             return self.store.drop_last_observation(session_id, record.version, idem)
 
         return await self._mutate(

@@ -25,10 +25,15 @@ class Settings(BaseSettings):
     model_config = SettingsConfigDict(env_prefix="TACTILE_", extra="ignore", frozen=True)
 
     # storage
+    db: str | None = Field(
+        None,
+        description="the database: a postgresql:// URL or a SQLite file path (env TACTILE_DB);"
+        " None: db_path",
+    )
     db_path: Path = Field(Path("tactile.db"), description="SQLite file (never ':memory:')")
     busy_timeout_ms: int = Field(5000, ge=0, le=600_000)
     sqlite_synchronous: Literal["NORMAL", "FULL", "EXTRA"] = "FULL"
-    db_pool_size: int = Field(4, ge=1, le=64, description="SQLite connections (and DB threads)")
+    db_pool_size: int = Field(4, ge=1, le=64, description="database connections (and DB threads)")
     session_cache_size: int = Field(64, ge=1, le=100_000, description="derived sessions kept")
     plan_cache_size: int = Field(64, ge=1, le=100_000)
 
@@ -59,6 +64,12 @@ class Settings(BaseSettings):
     log_level: Literal["debug", "info", "warning", "error"] = "info"
     log_json: bool = True
     idempotency_ttl_s: float = Field(7 * 24 * 3600.0, gt=0)
+    session_ttl_s: float | None = Field(
+        30 * 24 * 3600.0, gt=0, description="sessions idle this long are deleted; None: kept"
+    )
+    retention_interval_s: float = Field(
+        3600.0, gt=0, description="how often expired records and sessions are purged"
+    )
 
     @field_validator("db_path")
     @classmethod
@@ -66,6 +77,20 @@ class Settings(BaseSettings):
         if str(value).strip() in ("", ":memory:") or str(value).startswith("file::memory:"):
             raise ValueError("an in-memory database is not shared between threads; give a file")
         return value
+
+    @field_validator("db")
+    @classmethod
+    def _database(cls, value: str | None) -> str | None:
+        if value is not None:
+            from app.store import database_url
+
+            database_url(value)  # a URL of a supported backend, or a file path
+        return value
+
+    @property
+    def database(self) -> str:
+        """The store's target: `db` when set, else the SQLite file `db_path`."""
+        return self.db if self.db is not None else str(self.db_path)
 
     @model_validator(mode="after")
     def _defaults_within_limits(self) -> Settings:

@@ -1,80 +1,82 @@
-"""SQLite storage of objects and event-sourced sessions (DESIGN §3, §6).
+"""Storage of objects and event-sourced sessions (DESIGN §3, §6) on SQLite or PostgreSQL.
 
-A session is stored as what it is made of: its configuration (object set as
-§8 dictionaries, sensor bounds, safe circle, strategy) and its ordered
-observations; the hypothesis set is derived by the planner and never stored.
-Every write is one ``BEGIN IMMEDIATE`` transaction that compares the session's
-`version` before bumping it (compare-and-swap), so several worker processes can
-share one file. An idempotency record (key, request fingerprint, first answer)
-is written in the same transaction as the change it answers for, so a change
-and its replayable answer are durable together. WAL mode with
-``synchronous=FULL`` by default: a committed observation survives a killed
-process (and a power cut).
+A session is stored as what it is made of: its configuration (object set as §8
+dictionaries, sensor bounds, safe circle, strategy) and its ordered observations.
+Beside that event log the store keeps snapshots of the derived state (opaque
+bytes, tagged with the code version that wrote them) so that a host that never
+saw a session serves it without replaying every observation; the log stays the
+source of truth.
 
-The methods are blocking; the service calls them from worker threads. Each
-call takes one connection from a small pool (connections are never used by two
-threads at once). ``:memory:`` is refused: it would give each connection its
-own database.
+Written on SQLAlchemy Core; the backend is chosen by :func:`database_url`:
+
+- a file path: SQLite, embedded. WAL mode, ``synchronous=FULL`` by default (a
+  committed observation survives a killed process and a power cut); a write
+  transaction begins ``IMMEDIATE`` and so takes the file's write lock up front.
+- a ``postgresql://`` URL: PostgreSQL through psycopg 3, at its default
+  isolation (read committed), so several hosts share one database.
+
+Every change is one transaction, and a compare-and-swap on the session's
+`version`: ``UPDATE ... WHERE id = :id AND version = :expected`` and a row-count
+check. The update takes the session row's lock before anything else is
+written, so two writers of one session, on any host, are serialized by the
+database and the loser sees the winner's version. An idempotency record (key,
+request fingerprint, first answer) is written in the same transaction as the
+change it answers for (``INSERT ... ON CONFLICT DO NOTHING``; a record another
+host wrote first is answered instead).
+
+The schema is migrated with alembic at :meth:`Store.open` (:mod:`app.migrations`).
+The methods are blocking; the service calls them from worker threads.
 """
 
 from __future__ import annotations
 
 import json
-import queue
-import sqlite3
-import threading
+import re
 import time
-from collections.abc import Iterator, Sequence
+from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
+
+from sqlalchemy import (
+    URL,
+    Connection,
+    Engine,
+    create_engine,
+    delete,
+    event,
+    func,
+    make_url,
+    select,
+    text,
+    update,
+)
+from sqlalchemy import exc as sa_exc
+from sqlalchemy.dialects import postgresql, sqlite
+
+from app import migrations
+from app.store_schema import idempotency, objects, observations, sessions, snapshots
 
 __all__ = [
     "IdempotentWrite",
     "ObjectConflictError",
     "SessionGoneError",
     "SessionRecord",
+    "Snapshot",
     "Store",
+    "StoreUnavailableError",
     "StoredResponse",
     "VersionConflictError",
+    "database_url",
+    "is_url",
 ]
 
-SCHEMA_VERSION = 1
-_SCHEMA = """
-CREATE TABLE IF NOT EXISTS objects (
-    name TEXT PRIMARY KEY,
-    body TEXT NOT NULL,
-    created_at REAL NOT NULL
-);
-CREATE TABLE IF NOT EXISTS sessions (
-    id TEXT PRIMARY KEY,
-    version INTEGER NOT NULL,
-    config TEXT NOT NULL,
-    created_at REAL NOT NULL,
-    updated_at REAL NOT NULL
-);
-CREATE TABLE IF NOT EXISTS observations (
-    session_id TEXT NOT NULL REFERENCES sessions(id) ON DELETE CASCADE,
-    seq INTEGER NOT NULL,
-    body TEXT NOT NULL,
-    version INTEGER NOT NULL,
-    created_at REAL NOT NULL,
-    PRIMARY KEY (session_id, seq)
-) WITHOUT ROWID;
-CREATE TABLE IF NOT EXISTS idempotency (
-    scope TEXT NOT NULL,
-    key TEXT NOT NULL,
-    fingerprint TEXT NOT NULL,
-    status INTEGER NOT NULL,
-    headers TEXT NOT NULL,
-    body BLOB NOT NULL,
-    session_id TEXT,
-    created_at REAL NOT NULL,
-    PRIMARY KEY (scope, key)
-) WITHOUT ROWID;
-CREATE INDEX IF NOT EXISTS idempotency_session ON idempotency(session_id);
-"""
+#: Snapshots kept per session: the newest and the one before it (an undo's target).
+SNAPSHOTS_KEPT = 2
+#: The key of PostgreSQL advisory locks the store takes (migrations, retention).
+_LOCK_MIGRATE, _LOCK_RETENTION = 0x7AC7_0001, 0x7AC7_0002
+_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.\-]*://")
 
 
 class VersionConflictError(Exception):
@@ -91,6 +93,14 @@ class SessionGoneError(Exception):
 
 class ObjectConflictError(Exception):
     """An object of that name with other geometry is already registered."""
+
+
+class StoreUnavailableError(Exception):
+    """The database cannot take the request now (locked, busy, down): retry later."""
+
+
+class _IdempotencyRaceError(Exception):
+    """Another transaction stored an answer under the same key first."""
 
 
 @dataclass(frozen=True)
@@ -113,6 +123,14 @@ class IdempotentWrite:
 
 
 @dataclass(frozen=True)
+class Snapshot:
+    """Derived state after a session's first `n` observations, as opaque bytes."""
+
+    code_version: str
+    body: bytes
+
+
+@dataclass(frozen=True)
 class SessionRecord:
     """What a session is made of: configuration and ordered observations (JSON dicts)."""
 
@@ -127,226 +145,380 @@ def _dumps(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"), sort_keys=True, allow_nan=False)
 
 
+def is_url(value: str | Path) -> bool:
+    """True when `value` is written as a URL (``scheme://...``), never a file name."""
+    return bool(_URL_SCHEME.match(str(value).strip()))
+
+
+def database_url(target: str | Path) -> URL:
+    """The SQLAlchemy URL of a ``--db`` value: a URL is taken as one (PostgreSQL, or
+    ``sqlite:///file``), never as a file name; anything else is a SQLite file path.
+
+    >>> database_url("postgresql://u:p@db:5432/tactile").drivername
+    'postgresql+psycopg'
+    >>> database_url("data/tactile.db").database
+    'data/tactile.db'
+    >>> database_url("mysql://u@h/db")
+    Traceback (most recent call last):
+    ...
+    ValueError: unsupported database URL scheme 'mysql': give a postgresql:// URL or a file path
+    """
+    value = str(target).strip()
+    if is_url(value):
+        url = make_url(value)
+        backend = url.get_backend_name()
+        if backend in ("postgresql", "postgres"):
+            return url.set(drivername="postgresql+psycopg")
+        if backend == "sqlite" and url.database and ":memory:" not in url.database:
+            return url.set(drivername="sqlite")
+        raise ValueError(
+            f"unsupported database URL scheme {url.drivername!r}:"
+            " give a postgresql:// URL or a file path"
+        )
+    if value in ("", ":memory:") or "mode=memory" in value or value.startswith("file:"):
+        raise ValueError("an in-memory SQLite database is not shared between threads")
+    return URL.create("sqlite", database=value)
+
+
 class Store:
-    """Objects and sessions in one SQLite file (WAL, busy timeout, CAS on `version`)."""
+    """Objects and sessions in SQLite or PostgreSQL (CAS on `version`, one transaction
+    per write, snapshots beside the log)."""
 
     def __init__(
         self,
-        path: str | Path,
+        target: str | Path,
         *,
         busy_timeout_ms: int = 5000,
         synchronous: str = "FULL",
         pool_size: int = 4,
     ) -> None:
-        text = str(path)
-        if text in ("", ":memory:") or "mode=memory" in text or text.startswith("file::memory:"):
-            raise ValueError("an in-memory SQLite database is not shared between threads")
         if synchronous not in ("NORMAL", "FULL", "EXTRA"):
             raise ValueError("synchronous must be NORMAL, FULL or EXTRA")
-        self.path = Path(path)
+        self.url = database_url(target)
         self.busy_timeout_ms = busy_timeout_ms
         self.synchronous = synchronous
         self.pool_size = pool_size
-        self._pool: queue.LifoQueue[sqlite3.Connection] = queue.LifoQueue()
-        self._all: list[sqlite3.Connection] = []
-        self._lock = threading.Lock()
+        self._engine: Engine | None = None
         self._closed = False
 
+    @property
+    def backend(self) -> str:
+        """``sqlite`` or ``postgresql``."""
+        return self.url.get_backend_name()
+
+    @property
+    def path(self) -> Path | None:
+        """The SQLite file (None on PostgreSQL)."""
+        return Path(self.url.database) if self.backend == "sqlite" and self.url.database else None
+
+    def describe(self) -> str:
+        """Where the data lives, without a password (for logs)."""
+        return self.url.render_as_string(hide_password=True)
+
     # -- connections ----------------------------------------------------------------------------
-    def _connect(self) -> sqlite3.Connection:
-        conn = sqlite3.connect(
-            self.path,
-            timeout=self.busy_timeout_ms / 1000,
-            isolation_level=None,  # explicit BEGIN / COMMIT
-            check_same_thread=False,  # the pool hands it to one thread at a time
+    def _make_engine(self) -> Engine:
+        timeout_s = max(self.busy_timeout_ms / 1000, 1.0)
+        if self.backend == "postgresql":
+            return create_engine(
+                self.url,
+                pool_size=self.pool_size,
+                max_overflow=0,
+                pool_timeout=timeout_s,
+                pool_pre_ping=True,
+                connect_args={"connect_timeout": max(int(timeout_s), 1)},
+            )
+        engine = create_engine(
+            self.url,
+            pool_size=self.pool_size,
+            max_overflow=0,
+            pool_timeout=timeout_s,
+            connect_args={"timeout": self.busy_timeout_ms / 1000, "check_same_thread": False},
         )
-        conn.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_ms)}")
-        conn.execute(f"PRAGMA synchronous = {self.synchronous}")
-        conn.execute("PRAGMA foreign_keys = ON")
-        return conn
 
-    @contextmanager
-    def _connection(self) -> Iterator[sqlite3.Connection]:
-        if self._closed:
-            raise RuntimeError("the store is closed")
-        try:
-            conn = self._pool.get_nowait()
-        except queue.Empty:
-            with self._lock:
-                grow = len(self._all) < self.pool_size
-                if grow:
-                    conn = self._connect()
-                    self._all.append(conn)
-            if not grow:
-                conn = self._pool.get(timeout=max(self.busy_timeout_ms / 1000, 1.0))
-        try:
-            yield conn
-        finally:
-            if conn.in_transaction:  # a failure between BEGIN and COMMIT
-                conn.rollback()
-            self._pool.put(conn)
-
-    @contextmanager
-    def _write(self) -> Iterator[sqlite3.Connection]:
-        """One write transaction: BEGIN IMMEDIATE takes the write lock up front."""
-        with self._connection() as conn:
-            conn.execute("BEGIN IMMEDIATE")
-            try:
-                yield conn
-            except BaseException:
-                conn.execute("ROLLBACK")
-                raise
-            conn.execute("COMMIT")
-
-    @contextmanager
-    def _read(self) -> Iterator[sqlite3.Connection]:
-        """One read transaction (a consistent snapshot across several SELECTs)."""
-        with self._connection() as conn:
-            conn.execute("BEGIN")
-            try:
-                yield conn
-            finally:
-                conn.execute("COMMIT")
-
-    def open(self, idempotency_ttl_s: float | None = None) -> None:
-        """Create the file and schema (safe to run from several processes at once)."""
-        self.path.parent.mkdir(parents=True, exist_ok=True)
-        with self._connection() as conn:
-            mode = conn.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+        @event.listens_for(engine, "connect")
+        def _on_connect(dbapi_connection: Any, _record: Any) -> None:
+            dbapi_connection.isolation_level = None  # transactions are begun below
+            cursor = dbapi_connection.cursor()
+            cursor.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_ms)}")
+            cursor.execute(f"PRAGMA synchronous = {self.synchronous}")
+            cursor.execute("PRAGMA foreign_keys = ON")
+            mode = cursor.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+            cursor.close()
             if str(mode).lower() != "wal":
                 raise RuntimeError(f"SQLite refused WAL mode (got {mode!r})")
+
+        @event.listens_for(engine, "begin")
+        def _on_begin(conn: Connection) -> None:
+            write = conn.get_execution_options().get("tactile_write", False)
+            conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
+
+        return engine
+
+    @property
+    def engine(self) -> Engine:
+        if self._closed:
+            raise RuntimeError("the store is closed")
+        if self._engine is None:
+            self._engine = self._make_engine()
+        return self._engine
+
+    @contextmanager
+    def _transaction(self, write: bool) -> Iterator[Connection]:
+        try:
+            with self.engine.connect() as conn:
+                if write:
+                    conn = conn.execution_options(tactile_write=True)
+                with conn.begin():
+                    yield conn
+        except (sa_exc.OperationalError, sa_exc.InterfaceError, sa_exc.TimeoutError) as exc:
+            detail = getattr(exc, "orig", None) or exc
+            raise StoreUnavailableError(f"the database is unavailable: {detail}") from exc
+
+    def _write(self) -> Any:
+        """One write transaction (SQLite: BEGIN IMMEDIATE takes the write lock up front)."""
+        return self._transaction(write=True)
+
+    def _read(self) -> Any:
+        """One read transaction (a consistent view across several SELECTs)."""
+        return self._transaction(write=False)
+
+    def _insert(self, table: Any) -> Any:
+        dialect = postgresql if self.backend == "postgresql" else sqlite
+        return dialect.insert(table)
+
+    def _advisory_lock(self, conn: Connection, key: int, wait: bool) -> bool:
+        """PostgreSQL: a transaction-scoped advisory lock (SQLite's write lock is enough)."""
+        if self.backend != "postgresql":
+            return True
+        if wait:
+            conn.execute(text("SELECT pg_advisory_xact_lock(:k)"), {"k": key})
+            return True
+        return bool(conn.execute(text("SELECT pg_try_advisory_xact_lock(:k)"), {"k": key}).scalar())
+
+    def open(self) -> str:
+        """Create the database's schema or migrate it to this code's (safe to run from
+        several processes and hosts at once); returns the revision it was at before.
+
+        Raises :class:`app.migrations.SchemaTooNewError` for a database that a newer
+        release migrated."""
+        if self.path is not None:
+            self.path.parent.mkdir(parents=True, exist_ok=True)
         with self._write() as conn:
-            for statement in filter(str.strip, _SCHEMA.split(";")):
-                conn.execute(statement)
-            conn.execute(f"PRAGMA user_version = {SCHEMA_VERSION}")
-            if idempotency_ttl_s is not None:
-                conn.execute(
-                    "DELETE FROM idempotency WHERE created_at < ?",
-                    (time.time() - idempotency_ttl_s,),
-                )
+            self._advisory_lock(conn, _LOCK_MIGRATE, wait=True)
+            return migrations.upgrade(conn)
 
     def close(self) -> None:
         self._closed = True
-        with self._lock:
-            for conn in self._all:
-                conn.close()
-            self._all.clear()
+        if self._engine is not None:
+            self._engine.dispose()
+            self._engine = None
 
     def ping(self) -> bool:
-        with self._connection() as conn:
-            return conn.execute("SELECT 1").fetchone()[0] == 1
+        with self._read() as conn:
+            return conn.execute(select(1)).scalar() == 1
+
+    # -- retention ------------------------------------------------------------------------------
+    def purge(self, idempotency_ttl_s: float, session_ttl_s: float | None) -> dict[str, int] | None:
+        """Delete idempotency records older than their TTL and sessions idle for longer
+        than theirs. One host at a time: returns None when another is purging."""
+        now = time.time()
+        with self._write() as conn:
+            if not self._advisory_lock(conn, _LOCK_RETENTION, wait=False):
+                return None
+            old = idempotency.c.created_at < now - idempotency_ttl_s
+            removed = {"idempotency": conn.execute(delete(idempotency).where(old)).rowcount}
+            idle = 0
+            if session_ttl_s is not None:
+                stale = select(sessions.c.id).where(sessions.c.updated_at < now - session_ttl_s)
+                ids = list(conn.execute(stale).scalars())
+                for chunk in range(0, len(ids), 500):
+                    part = ids[chunk : chunk + 500]
+                    conn.execute(delete(idempotency).where(idempotency.c.session_id.in_(part)))
+                    conn.execute(delete(snapshots).where(snapshots.c.session_id.in_(part)))
+                    conn.execute(delete(observations).where(observations.c.session_id.in_(part)))
+                    idle += conn.execute(delete(sessions).where(sessions.c.id.in_(part))).rowcount
+            removed["sessions"] = idle
+        return removed
 
     # -- objects --------------------------------------------------------------------------------
     def put_object(self, name: str, body: dict[str, Any]) -> bool:
         """Register an object; True when new, False when the same object was there.
 
         Raises :class:`ObjectConflictError` when the name holds another object."""
-        text = _dumps(body)
+        body_text = _dumps(body)
         with self._write() as conn:
-            row = conn.execute("SELECT body FROM objects WHERE name = ?", (name,)).fetchone()
-            if row is not None:
-                if row[0] != text:
-                    raise ObjectConflictError(name)
-                return False
-            conn.execute(
-                "INSERT INTO objects (name, body, created_at) VALUES (?, ?, ?)",
-                (name, text, time.time()),
-            )
-            return True
+            added = conn.execute(
+                self._insert(objects)
+                .values(name=name, body=body_text, created_at=time.time())
+                .on_conflict_do_nothing(index_elements=["name"])
+                .returning(objects.c.name)  # a row back when inserted (rowcount is not kept)
+            ).first()
+            if added is not None:
+                return True
+            there = conn.execute(select(objects.c.body).where(objects.c.name == name)).scalar()
+        if there != body_text:
+            raise ObjectConflictError(name)
+        return False
 
     def get_objects(self, names: Sequence[str]) -> dict[str, dict[str, Any]]:
         """The registered objects among `names` (missing names are left out)."""
         if not names:
             return {}
-        marks = ",".join("?" * len(set(names)))
-        with self._connection() as conn:
+        with self._read() as conn:
             rows = conn.execute(
-                f"SELECT name, body FROM objects WHERE name IN ({marks})", tuple(set(names))
-            ).fetchall()
+                select(objects.c.name, objects.c.body).where(objects.c.name.in_(set(names)))
+            ).all()
         return {name: json.loads(body) for name, body in rows}
 
     def list_objects(self, limit: int) -> list[dict[str, Any]]:
-        with self._connection() as conn:
+        with self._read() as conn:
             rows = conn.execute(
-                "SELECT body FROM objects ORDER BY name LIMIT ?", (limit,)
-            ).fetchall()
-        return [json.loads(r[0]) for r in rows]
+                select(objects.c.body).order_by(objects.c.name).limit(limit)
+            ).scalars()
+            return [json.loads(r) for r in rows]
 
     # -- sessions -------------------------------------------------------------------------------
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._read() as conn:
             row = conn.execute(
-                "SELECT version, config, created_at FROM sessions WHERE id = ?", (session_id,)
-            ).fetchone()
+                select(sessions.c.version, sessions.c.config, sessions.c.created_at).where(
+                    sessions.c.id == session_id
+                )
+            ).first()
             if row is None:
                 return None
             obs = conn.execute(
-                "SELECT body FROM observations WHERE session_id = ? ORDER BY seq", (session_id,)
-            ).fetchall()
-        return SessionRecord(
-            session_id, row[0], json.loads(row[1]), tuple(json.loads(o[0]) for o in obs), row[2]
-        )
+                select(observations.c.body)
+                .where(observations.c.session_id == session_id)
+                .order_by(observations.c.seq)
+            ).scalars()
+            stored = tuple(json.loads(o) for o in obs)
+        return SessionRecord(session_id, row[0], json.loads(row[1]), stored, row[2])
+
+    def get_snapshot(
+        self, session_id: str, code_version: str, at_most: int
+    ) -> tuple[int, bytes] | None:
+        """The newest snapshot of `code_version` after at most `at_most` observations."""
+        with self._read() as conn:
+            row = conn.execute(
+                select(snapshots.c.n, snapshots.c.body)
+                .where(
+                    snapshots.c.session_id == session_id,
+                    snapshots.c.code_version == code_version,
+                    snapshots.c.n <= at_most,
+                )
+                .order_by(snapshots.c.n.desc())
+                .limit(1)
+            ).first()
+        return None if row is None else (int(row[0]), bytes(row[1]))
 
     def get_idempotent(self, scope: str, key: str) -> StoredResponse | None:
-        with self._connection() as conn:
+        with self._read() as conn:
             return self._stored(conn, scope, key)
 
     @staticmethod
-    def _stored(conn: sqlite3.Connection, scope: str, key: str) -> StoredResponse | None:
+    def _stored(conn: Connection, scope: str, key: str) -> StoredResponse | None:
         row = conn.execute(
-            "SELECT fingerprint, status, headers, body FROM idempotency"
-            " WHERE scope = ? AND key = ?",
-            (scope, key),
-        ).fetchone()
+            select(
+                idempotency.c.fingerprint,
+                idempotency.c.status,
+                idempotency.c.headers,
+                idempotency.c.body,
+            ).where(idempotency.c.scope == scope, idempotency.c.key == key)
+        ).first()
         if row is None:
             return None
         return StoredResponse(row[0], row[1], bytes(row[3]), json.loads(row[2]))
 
-    @staticmethod
     def _remember(
-        conn: sqlite3.Connection, idem: IdempotentWrite | None, session_id: str | None
+        self, conn: Connection, idem: IdempotentWrite | None, session_id: str | None
     ) -> None:
+        """Store the answer under its key; :class:`_IdempotencyRaceError` (the transaction is
+        then rolled back) when another transaction stored one under it first."""
         if idem is None:
             return
         r = idem.response
-        conn.execute(
-            "INSERT INTO idempotency (scope, key, fingerprint, status, headers, body, session_id,"
-            " created_at) VALUES (?, ?, ?, ?, ?, ?, ?, ?)",
-            (
-                idem.scope,
-                idem.key,
-                r.fingerprint,
-                r.status,
-                _dumps(r.headers),
-                r.body,
-                session_id,
-                time.time(),
-            ),
-        )
+        added = conn.execute(
+            self._insert(idempotency)
+            .values(
+                scope=idem.scope,
+                key=idem.key,
+                fingerprint=r.fingerprint,
+                status=r.status,
+                headers=_dumps(r.headers),
+                body=r.body,
+                session_id=session_id,
+                created_at=time.time(),
+            )
+            .on_conflict_do_nothing(index_elements=["scope", "key"])
+            .returning(idempotency.c.key)  # a row back when inserted (rowcount is not kept)
+        ).first()
+        if added is None:
+            raise _IdempotencyRaceError
 
-    @staticmethod
-    def _current_version(conn: sqlite3.Connection, session_id: str) -> int:
-        row = conn.execute("SELECT version FROM sessions WHERE id = ?", (session_id,)).fetchone()
-        if row is None:
+    def _change(
+        self,
+        idem: IdempotentWrite | None,
+        session_id: str,
+        work: Callable[[Connection], None],
+    ) -> StoredResponse | None:
+        """One write transaction: `work`, then the answer stored under `idem`'s key.
+
+        Returns the stored answer instead (nothing written) when the key was already
+        used, also when another host stored it while this transaction ran (rolled back)."""
+        try:
+            with self._write() as conn:
+                if idem is not None and (old := self._stored(conn, idem.scope, idem.key)):
+                    return old
+                work(conn)
+                self._remember(conn, idem, session_id)
+        except _IdempotencyRaceError:
+            assert idem is not None
+            old = self.get_idempotent(idem.scope, idem.key)
+            if old is None:  # pragma: no cover - the winner's record is committed
+                raise
+            return old
+        return None
+
+    def _swap_version(
+        self, conn: Connection, session_id: str, expected: int, idem: IdempotentWrite | None
+    ) -> int:
+        """The compare-and-swap: version `expected` -> `expected + 1`, or the reason not."""
+        bumped = conn.execute(
+            update(sessions)
+            .where(sessions.c.id == session_id, sessions.c.version == expected)
+            .values(version=expected + 1, updated_at=time.time())
+        ).rowcount
+        if bumped == 1:
+            return expected + 1
+        current = conn.execute(
+            select(sessions.c.version).where(sessions.c.id == session_id)
+        ).scalar()
+        if current is None:
             raise SessionGoneError(session_id)
-        return int(row[0])
+        if idem is not None and self._stored(conn, idem.scope, idem.key) is not None:
+            raise _IdempotencyRaceError  # the same request landed on another host first
+        raise VersionConflictError(int(current))
 
     def create_session(
         self, record: SessionRecord, idem: IdempotentWrite | None = None
     ) -> StoredResponse | None:
         """Insert a new session (version 1, no observation). Returns the stored answer
         instead when `idem`'s key was already used (nothing is written then)."""
-        with self._write() as conn:
-            if idem is not None and (old := self._stored(conn, idem.scope, idem.key)):
-                return old
+
+        def work(conn: Connection) -> None:
             now = time.time()
             conn.execute(
-                "INSERT INTO sessions (id, version, config, created_at, updated_at)"
-                " VALUES (?, ?, ?, ?, ?)",
-                (record.id, record.version, _dumps(record.config), now, now),
+                sessions.insert().values(
+                    id=record.id,
+                    version=record.version,
+                    config=_dumps(record.config),
+                    created_at=now,
+                    updated_at=now,
+                )
             )
-            self._remember(conn, idem, record.id)
-        return None
+
+        return self._change(idem, record.id, work)
 
     def append_observation(
         self,
@@ -354,64 +526,90 @@ class Store:
         expected_version: int,
         observation: dict[str, Any],
         idem: IdempotentWrite | None = None,
+        snapshot: Snapshot | None = None,
     ) -> StoredResponse | None:
-        """Append one observation if the session is still at `expected_version`.
+        """Append one observation if the session is still at `expected_version`, with
+        the snapshot of the state it leads to.
 
         Raises :class:`VersionConflictError` or :class:`SessionGoneError`; returns the
         stored answer instead when `idem`'s key was already used."""
-        with self._write() as conn:
-            if idem is not None and (old := self._stored(conn, idem.scope, idem.key)):
-                return old
-            current = self._current_version(conn, session_id)
-            if current != expected_version:
-                raise VersionConflictError(current)
+
+        def work(conn: Connection) -> None:
+            version = self._swap_version(conn, session_id, expected_version, idem)
             seq = conn.execute(
-                "SELECT COALESCE(MAX(seq) + 1, 0) FROM observations WHERE session_id = ?",
-                (session_id,),
-            ).fetchone()[0]
+                select(func.coalesce(func.max(observations.c.seq) + 1, 0)).where(
+                    observations.c.session_id == session_id
+                )
+            ).scalar()
             now = time.time()
             conn.execute(
-                "INSERT INTO observations (session_id, seq, body, version, created_at)"
-                " VALUES (?, ?, ?, ?, ?)",
-                (session_id, seq, _dumps(observation), current + 1, now),
+                observations.insert().values(
+                    session_id=session_id,
+                    seq=seq,
+                    body=_dumps(observation),
+                    version=version,
+                    created_at=now,
+                )
             )
-            conn.execute(
-                "UPDATE sessions SET version = ?, updated_at = ? WHERE id = ?",
-                (current + 1, now, session_id),
+            if snapshot is not None:
+                self._put_snapshot(conn, session_id, int(seq) + 1, snapshot, now)
+
+        return self._change(idem, session_id, work)
+
+    def _put_snapshot(
+        self, conn: Connection, session_id: str, n: int, snap: Snapshot, now: float
+    ) -> None:
+        values = {"code_version": snap.code_version, "body": snap.body, "created_at": now}
+        conn.execute(
+            self._insert(snapshots)
+            .values(session_id=session_id, n=n, **values)
+            .on_conflict_do_update(index_elements=["session_id", "n"], set_=values)
+        )
+        conn.execute(
+            delete(snapshots).where(
+                snapshots.c.session_id == session_id, snapshots.c.n <= n - SNAPSHOTS_KEPT
             )
-            self._remember(conn, idem, session_id)
-        return None
+        )
 
     def drop_last_observation(
         self, session_id: str, expected_version: int, idem: IdempotentWrite | None = None
     ) -> StoredResponse | None:
-        """Undo: remove the last observation if still at `expected_version`."""
-        with self._write() as conn:
-            if idem is not None and (old := self._stored(conn, idem.scope, idem.key)):
-                return old
-            current = self._current_version(conn, session_id)
-            if current != expected_version:
-                raise VersionConflictError(current)
-            deleted = conn.execute(
-                "DELETE FROM observations WHERE session_id = ? AND seq ="
-                " (SELECT MAX(seq) FROM observations WHERE session_id = ?)",
-                (session_id, session_id),
-            ).rowcount
-            if deleted != 1:
+        """Undo: remove the last observation (and the snapshots after the ones left) if
+        still at `expected_version`."""
+
+        def work(conn: Connection) -> None:
+            self._swap_version(conn, session_id, expected_version, idem)
+            last = conn.execute(
+                select(func.max(observations.c.seq)).where(observations.c.session_id == session_id)
+            ).scalar()
+            if last is None:
                 raise LookupError("no observation to undo")
             conn.execute(
-                "UPDATE sessions SET version = ?, updated_at = ? WHERE id = ?",
-                (current + 1, time.time(), session_id),
+                delete(observations).where(
+                    observations.c.session_id == session_id, observations.c.seq == last
+                )
             )
-            self._remember(conn, idem, session_id)
-        return None
+            conn.execute(
+                delete(snapshots).where(
+                    snapshots.c.session_id == session_id, snapshots.c.n > int(last)
+                )
+            )
+
+        return self._change(idem, session_id, work)
 
     def delete_session(self, session_id: str, expected_version: int | None = None) -> None:
-        """Delete a session, its observations and its idempotency records."""
+        """Delete a session, its observations, snapshots and idempotency records."""
         with self._write() as conn:
-            current = self._current_version(conn, session_id)
-            if expected_version is not None and current != expected_version:
-                raise VersionConflictError(current)
-            conn.execute("DELETE FROM observations WHERE session_id = ?", (session_id,))
-            conn.execute("DELETE FROM idempotency WHERE session_id = ?", (session_id,))
-            conn.execute("DELETE FROM sessions WHERE id = ?", (session_id,))
+            if expected_version is not None:
+                self._swap_version(conn, session_id, expected_version, None)
+            elif (
+                conn.execute(
+                    select(sessions.c.version).where(sessions.c.id == session_id).with_for_update()
+                ).first()
+                is None
+            ):
+                raise SessionGoneError(session_id)
+            for table in (observations, snapshots):
+                conn.execute(delete(table).where(table.c.session_id == session_id))
+            conn.execute(delete(idempotency).where(idempotency.c.session_id == session_id))
+            conn.execute(delete(sessions).where(sessions.c.id == session_id))

@@ -140,6 +140,12 @@ class Session:
             accuracy=self.accuracy,
         )
 
+    def __getstate__(self) -> dict:
+        """Pickled without the parent chain (a restored session undoes by replaying)."""
+        state = dict(self.__dict__)
+        state["_parent"] = None
+        return state
+
     @property
     def models_by_name(self) -> dict[str, ObjectModel]:
         return {m.name: m for m in self.models}

@@ -1,5 +1,5 @@
 """Concurrent writers on one session: optimistic concurrency, per-session serialization,
-idempotent retries, and two processes' worth of stores on one SQLite file."""
+and idempotent retries (the store itself: test_store.py)."""
 
 from __future__ import annotations
 
@@ -8,7 +8,6 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from app.store import SessionRecord, Store, VersionConflictError
 from tests.app.api_support import api, create_session, miss
 
 THREADS = 8
@@ -98,35 +97,3 @@ def test_idempotent_retries_store_once(client):
     assert later.headers["idempotent-replayed"] == "true"
     origins, _ = _origins(client, sid)
     assert origins == [round(-9 + 0.005, 4)]
-
-
-def test_two_stores_on_one_file_compare_and_swap(tmp_path):
-    """Two worker processes share the file: a write computed on a stale version loses."""
-    a, b = Store(tmp_path / "shared.db"), Store(tmp_path / "shared.db")
-    a.open()
-    b.open()
-    try:
-        a.create_session(SessionRecord("s", 1, {"k": 1}, (), 0.0))
-        a.append_observation("s", 1, {"n": 1})
-        with pytest.raises(VersionConflictError) as lost:
-            b.append_observation("s", 1, {"n": 2})
-        assert lost.value.current == 2
-        b.append_observation("s", 2, {"n": 2})
-        assert [o["n"] for o in a.get_session("s").observations] == [1, 2]
-    finally:
-        a.close()
-        b.close()
-
-
-def test_store_uses_wal_and_busy_timeout(tmp_path):
-    store = Store(tmp_path / "wal.db", busy_timeout_ms=1234)
-    store.open()
-    try:
-        with store._connection() as conn:
-            assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
-            assert conn.execute("PRAGMA busy_timeout").fetchone()[0] == 1234
-            assert conn.execute("PRAGMA synchronous").fetchone()[0] == 2  # FULL
-    finally:
-        store.close()
-    with pytest.raises(ValueError, match="memory"):
-        Store(":memory:")
