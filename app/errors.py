@@ -23,6 +23,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
+from app.store import StoreUnavailableError
 from planner.errors import (
     InvalidModelError,
     InvalidObservationError,
@@ -44,6 +45,7 @@ __all__ = [
     "PreconditionFailedError",
     "Problem",
     "UnauthorizedError",
+    "UnavailableError",
     "install_error_handlers",
     "problem_response",
 ]
@@ -122,6 +124,10 @@ class PreconditionFailedError(AppError):
 
 class UnauthorizedError(AppError):
     status, slug, title = 401, "unauthorized", "Unauthorized"
+
+
+class UnavailableError(AppError):
+    status, slug, title = 503, "unavailable", "Service unavailable"
 
 
 # planner error -> (status, slug, title); the most specific class wins
@@ -230,6 +236,12 @@ def install_error_handlers(app: FastAPI) -> None:
             errors=errors,
             headers=exc.headers,
         )
+
+    @app.exception_handler(StoreUnavailableError)
+    async def _store_unavailable(request: Request, exc: StoreUnavailableError) -> JSONResponse:
+        # the database is locked, busy or down: nothing was changed, the request may be retried
+        error = UnavailableError(str(exc), headers={"Retry-After": "1"})
+        return await _app_error(request, error)
 
     @app.exception_handler(PlannerError)
     async def _planner_error(request: Request, exc: PlannerError) -> JSONResponse:

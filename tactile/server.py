@@ -19,12 +19,13 @@ ROOT = Path(__file__).resolve().parents[1]
 
 
 class Server:
-    """`tactile serve` in a subprocess on 127.0.0.1 and a port it picked itself.
+    """`tactile serve` in a subprocess on 127.0.0.1 and a port it picked itself; `db` is
+    a SQLite file or a postgresql:// URL.
 
     A thread keeps reading the server's log (stderr) so that it never blocks on a
     full pipe; the lines are kept in `lines`."""
 
-    def __init__(self, db: Path, *args: str, env: dict[str, str] | None = None) -> None:
+    def __init__(self, db: Path | str, *args: str, env: dict[str, str] | None = None) -> None:
         self.db = db
         self.args = args
         self.env = {**os.environ, "TACTILE_LOG_LEVEL": "info", **(env or {})}
