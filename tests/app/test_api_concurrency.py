@@ -15,8 +15,8 @@ PER_THREAD = 3
 
 
 @pytest.fixture
-def client(tmp_path):
-    with api(tmp_path, cpu_workers=2) as c:
+def client(tmp_path, db_target):
+    with api(tmp_path, cpu_workers=2, db=db_target) as c:
         yield c
 
 

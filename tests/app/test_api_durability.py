@@ -3,7 +3,7 @@
 The server runs on 127.0.0.1 with a port it picks itself. A client posts
 observations (one contact, then misses) and records each acknowledged one;
 the server is killed with SIGKILL while the client is still posting; a new
-server on the same database file must hold every acknowledged observation, in
+server on the same database (a SQLite file, a PostgreSQL database) must hold every acknowledged observation, in
 order (plus at most the one that was in flight).
 """
 
@@ -24,8 +24,8 @@ def _signature(obs: dict) -> tuple:
     return (tuple(round(v, 6) for v in obs["path"]["origin"]), obs["contact"] is not None)
 
 
-def test_acknowledged_observations_survive_sigkill(tmp_path):
-    db = tmp_path / "durable.db"
+def test_acknowledged_observations_survive_sigkill(db_target):
+    db = db_target
     acked: list[tuple] = []
     stop = threading.Event()
     with Server(db) as server:
@@ -77,8 +77,8 @@ def test_acknowledged_observations_survive_sigkill(tmp_path):
     assert any(e["request_id"] == rid and e["status"] == 201 for e in access)
 
 
-def test_serve_with_two_workers_shares_the_database(tmp_path):
-    db = tmp_path / "workers.db"
+def test_serve_with_two_workers_shares_the_database(db_target):
+    db = db_target
     with Server(db, "--workers", "2") as server, httpx.Client(base_url=server.url) as http:
         sid = http.post("/v1/sessions", json={"objects": [SQUARE]}).json()["id"]
         for k in range(6):  # new connections spread over both workers
