@@ -1,7 +1,10 @@
 """Load test: a real ``tactile serve`` and a headless locust fleet of simulated robots.
 
 ``python -m tactile.loadtest --workers 2 --users 8 --seconds 30`` starts the
-service on a free loopback port with a fresh database, runs locust headless for a
+service on a free loopback port with a fresh database (``--db URL``: a
+PostgreSQL database instead of a temporary SQLite file; ``--hosts N``: N
+services on N ports sharing that database, every robot's requests spread over
+all of them at random, results per host), runs locust headless for a
 bounded time, prints requests/s and p50/p95/p99 per endpoint, and exits non-zero on
 any failed request. Traffic goes to 127.0.0.1 only.
 
@@ -49,6 +52,26 @@ def _wait_ready(url: str, timeout: float = 60.0) -> None:
 MODES = {"recognize": "Robot", "observe": "Prober"}
 
 
+def _serve(port: int, workers: int, db: str) -> subprocess.Popen[bytes]:
+    return subprocess.Popen(
+        [
+            str(Path(sys.executable).parent / "tactile"),
+            "serve",
+            "--host",
+            "127.0.0.1",
+            "--port",
+            str(port),
+            "--workers",
+            str(workers),
+            "--db",
+            db,
+        ],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env={**os.environ, "TACTILE_LOG_LEVEL": "warning"},
+    )
+
+
 def run(
     workers: int,
     users: int,
@@ -57,35 +80,27 @@ def run(
     mode: str = "recognize",
     hypotheses: int | None = None,
     keepalive: bool = True,
+    hosts: int = 1,
+    db: str | None = None,
 ) -> dict:
     """One load run; returns per-endpoint statistics and the failure count."""
     bin_dir = Path(sys.executable).parent
-    port = _free_port()
-    url = f"http://127.0.0.1:{port}"
+    urls = []
     with tempfile.TemporaryDirectory() as tmp:
-        server = subprocess.Popen(
-            [
-                str(bin_dir / "tactile"),
-                "serve",
-                "--host",
-                "127.0.0.1",
-                "--port",
-                str(port),
-                "--workers",
-                str(workers),
-                "--db",
-                str(Path(tmp) / "load.db"),
-            ],
-            stdout=subprocess.DEVNULL,
-            stderr=subprocess.DEVNULL,
-            env={**os.environ, "TACTILE_LOG_LEVEL": "warning"},
-        )
+        target = db or str(Path(tmp) / "load.db")
+        servers = []
         try:
-            _wait_ready(url)
-            prefix = out / f"{mode}-workers{workers}"
+            for _ in range(hosts):
+                port = _free_port()
+                servers.append(_serve(port, workers, target))
+                urls.append(f"http://127.0.0.1:{port}")
+                _wait_ready(urls[-1])  # one at a time: the first one migrates the schema
+            prefix = out / f"{mode}-hosts{hosts}-workers{workers}"
             env = {
                 **os.environ,
                 "LOADTEST_HYPOTHESES": "" if hypotheses is None else str(hypotheses),
+                "LOADTEST_KEEPALIVE": "1" if keepalive else "0",
+                "LOADTEST_HOSTS": ",".join(urls) if hosts > 1 else "",
             }
             subprocess.run(
                 [
@@ -101,7 +116,7 @@ def run(
                     "--run-time",
                     f"{seconds}s",
                     "--host",
-                    url,
+                    urls[0],
                     "--csv",
                     str(prefix),
                     "--only-summary",
@@ -116,8 +131,10 @@ def run(
                 env=env,
             )
         finally:
-            server.terminate()
-            server.wait(timeout=30)
+            for server in servers:
+                server.terminate()
+            for server in servers:
+                server.wait(timeout=30)
     with open(f"{prefix}_stats.csv", encoding="utf-8") as f:
         rows = list(csv.DictReader(f))
     endpoints = {
@@ -130,10 +147,22 @@ def run(
             "p99_ms": float(r["99%"]),
         }
         for r in rows
+        if r["Name"] != "Aggregated"
     }
     failures = sum(e["failures"] for e in endpoints.values())
+    per_host = {}
+    for h in range(hosts):
+        mine = [e for name, e in endpoints.items() if hosts == 1 or name.endswith(f"@h{h}")]
+        per_host[f"h{h}"] = {
+            "requests": sum(e["requests"] for e in mine),
+            "rps": round(sum(e["rps"] for e in mine), 2),
+            "failures": sum(e["failures"] for e in mine),
+        }
     return {
         "mode": mode,
+        "hosts": hosts,
+        "database": "postgresql" if db and db.startswith("postgres") else "sqlite",
+        "per_host": per_host,
         "keepalive": keepalive,
         "workers": workers,
         "users": users,
@@ -156,19 +185,34 @@ def main(argv: list[str] | None = None) -> int:
         action="store_true",
         help="a new connection per request (requests of a session spread over the workers)",
     )
+    parser.add_argument("--hosts", type=int, default=1, help="services sharing one database")
+    parser.add_argument(
+        "--db", default=None, help="a postgresql:// URL (default: a temporary SQLite file)"
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     out = Path(args.out)
     out.mkdir(parents=True, exist_ok=True)
     results = [
-        run(w, args.users, args.seconds, out, args.mode, args.hypotheses, not args.no_keepalive)
+        run(
+            w,
+            args.users,
+            args.seconds,
+            out,
+            args.mode,
+            args.hypotheses,
+            not args.no_keepalive,
+            args.hosts,
+            args.db,
+        )
         for w in args.workers
     ]
     if args.json:
         print(json.dumps(results, indent=1))
     for res in results:
         print(
-            f"\n{res['workers']} worker(s), {res['users']} robots ({res['mode']}"
+            f"\n{res['hosts']} host(s) x {res['workers']} worker(s) on {res['database']},"
+            f" {res['users']} robots ({res['mode']}"
             f"{'' if res['keepalive'] else ', no keep-alive'}), {res['seconds']} s:"
         )
         print(
@@ -178,6 +222,11 @@ def main(argv: list[str] | None = None) -> int:
             print(
                 f"  {name:40s} {e['requests']:8d} {e['rps']:7.1f} {e['p50_ms']:6.0f} "
                 f"{e['p95_ms']:6.0f} {e['p99_ms']:6.0f}"
+            )
+        for host, total in res["per_host"].items():
+            print(
+                f"  host {host}: {total['requests']} requests, {total['rps']:.1f} req/s,"
+                f" {total['failures']} failed"
             )
         print(f"  failed requests: {res['failures']}")
     return 1 if any(r["failures"] for r in results) else 0

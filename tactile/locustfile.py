@@ -11,7 +11,10 @@ default):
   observation endpoint sustains by itself.
 
 Run through ``python -m tactile.loadtest``. ``LOADTEST_KEEPALIVE=0`` opens a
-connection per request. Observations are posted with
+connection per request. ``LOADTEST_HOSTS`` (comma-separated base URLs) spreads
+each robot's requests over several hosts at random, so that every host serves
+every session (as behind a reverse proxy); each request is then reported under
+its endpoint and host (``... @h0``). Observations are posted with
 ``?limit=LOADTEST_HYPOTHESES`` (default: no limit, the whole hypothesis list).
 The robots use locust's geventhttpclient user (keep-alive, far less CPU per
 request than python-requests), which matters when locust shares the machine.
@@ -45,6 +48,7 @@ OBSERVE_QUERY = f"?limit={int(HYPOTHESES)}" if HYPOTHESES else ""
 #: session's requests then land on any worker, as behind a load balancer)
 KEEPALIVE = os.environ.get("LOADTEST_KEEPALIVE", "1") != "0"
 DONE = ("localized", "inconsistent")
+HOSTS = [h.rstrip("/") for h in os.environ.get("LOADTEST_HOSTS", "").split(",") if h]
 
 
 class _Fleet(FastHttpUser):
@@ -54,10 +58,20 @@ class _Fleet(FastHttpUser):
 
     def on_start(self) -> None:
         self.rng = np.random.default_rng(abs(hash(id(self))) % 2**32)
+        self.pick = np.random.default_rng(self.rng.integers(2**32))  # hosts, apart from worlds
+
+    def _at(self, path: str, name: str) -> tuple[str, str]:
+        """The URL and report name of the next request: a host drawn at random (every
+        endpoint of every session spread evenly, as a round-robin proxy would)."""
+        if not HOSTS:
+            return path, name
+        host = int(self.pick.integers(len(HOSTS)))
+        return HOSTS[host] + path, f"{name} @h{host}"
 
     def _create(self) -> str | None:
+        url, name = self._at("/v1/sessions", "POST /v1/sessions")
         created = self.client.post(
-            "/v1/sessions",
+            url,
             json={
                 "objects": OBJECTS,
                 "sensor": sensor_to_dict(BOUNDS),
@@ -65,20 +79,21 @@ class _Fleet(FastHttpUser):
                 "sensor_position": [WORKSPACE.radius, 0.0],
                 "strategy": STRATEGY,
             },
-            name="POST /v1/sessions",
+            name=name,
         )
         return created.json()["id"] if created.status_code == 201 else None
 
     def _observe(self, sid: str, obs: Observation) -> str | None:
-        state = self.client.post(
+        url, name = self._at(
             f"/v1/sessions/{sid}/observations{OBSERVE_QUERY}",
-            json=observation_to_dict(obs),
-            name="POST /v1/sessions/{id}/observations",
+            "POST /v1/sessions/{id}/observations",
         )
+        state = self.client.post(url, json=observation_to_dict(obs), name=name)
         return state.json()["status"] if state.status_code == 201 else None
 
     def _delete(self, sid: str) -> None:
-        self.client.delete(f"/v1/sessions/{sid}", name="DELETE /v1/sessions/{id}")
+        url, name = self._at(f"/v1/sessions/{sid}", "DELETE /v1/sessions/{id}")
+        self.client.delete(url, name=name)
 
 
 class Robot(_Fleet):
@@ -91,9 +106,8 @@ class Robot(_Fleet):
         if sid is None:
             return
         for _ in range(MAX_TOUCHES):
-            plan = self.client.get(
-                f"/v1/sessions/{sid}/plan?limit=1", name="GET /v1/sessions/{id}/plan"
-            )
+            url, name = self._at(f"/v1/sessions/{sid}/plan?limit=1", "GET /v1/sessions/{id}/plan")
+            plan = self.client.get(url, name=name)
             paths = plan.json().get("paths", []) if plan.status_code == 200 else []
             if not paths:
                 break
