@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 import pydantic_core
 
-from app.store import SessionRecord
+from app.store_types import SessionRecord
 from planner.codec import (
     accuracy_from_dict,
     observation_from_dict,

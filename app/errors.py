@@ -23,7 +23,7 @@ from fastapi.responses import JSONResponse
 from pydantic import BaseModel, Field
 from starlette.exceptions import HTTPException as StarletteHTTPException
 
-from app.store import StoreUnavailableError
+from app.store_types import StoreUnavailableError
 from planner.errors import (
     InvalidModelError,
     InvalidObservationError,

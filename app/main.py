@@ -31,7 +31,8 @@ from app.routes import health, objects, observations, pictures, plan, sessions, 
 from app.schemas import input_models
 from app.service import SessionService
 from app.settings import Settings
-from app.store import Store, StoreUnavailableError
+from app.store import Store
+from app.store_types import StoreUnavailableError
 
 __all__ = ["TactileAPI", "create_app"]
 

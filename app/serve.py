@@ -73,7 +73,7 @@ def _metrics_dir(workers: int) -> None:
 
 def database_label(target: str) -> str:
     """The database for a log line: a URL without its password."""
-    from app.store import database_url
+    from app.store_types import database_url
 
     return database_url(target).render_as_string(hide_password=True)
 
@@ -87,7 +87,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from app.settings import Settings
 
     if args.db is not None:
-        from app.store import database_url, is_url
+        from app.store_types import database_url, is_url
 
         database_url(args.db)  # refuse what no backend takes before anything starts
         db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())

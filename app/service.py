@@ -52,12 +52,12 @@ from app.errors import (
 )
 from app.session_config import resolve_models, session_config
 from app.settings import Settings
-from app.store import (
+from app.store import Store
+from app.store_types import (
     IdempotentWrite,
     SessionGoneError,
     SessionRecord,
     Snapshot,
-    Store,
     StoredResponse,
     VersionConflictError,
 )

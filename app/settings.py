@@ -82,7 +82,7 @@ class Settings(BaseSettings):
     @classmethod
     def _database(cls, value: str | None) -> str | None:
         if value is not None:
-            from app.store import database_url
+            from app.store_types import database_url
 
             database_url(value)  # a URL of a supported backend, or a file path
         return value

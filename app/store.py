@@ -31,23 +31,17 @@ The methods are blocking; the service calls them from worker threads.
 from __future__ import annotations
 
 import json
-import re
 import time
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import contextmanager
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from sqlalchemy import (
-    URL,
     Connection,
     Engine,
-    create_engine,
     delete,
-    event,
     func,
-    make_url,
     select,
     text,
     update,
@@ -56,128 +50,34 @@ from sqlalchemy import exc as sa_exc
 from sqlalchemy.dialects import postgresql, sqlite
 
 from app import migrations
+from app.store_engine import WRITE_OPTION, make_engine
 from app.store_schema import idempotency, objects, observations, sessions, snapshots
+from app.store_types import (
+    IdempotentWrite,
+    ObjectConflictError,
+    SessionGoneError,
+    SessionRecord,
+    Snapshot,
+    StoredResponse,
+    StoreUnavailableError,
+    VersionConflictError,
+    database_url,
+)
 
-__all__ = [
-    "IdempotentWrite",
-    "ObjectConflictError",
-    "SessionGoneError",
-    "SessionRecord",
-    "Snapshot",
-    "Store",
-    "StoreUnavailableError",
-    "StoredResponse",
-    "VersionConflictError",
-    "database_url",
-    "is_url",
-]
+__all__ = ["Store"]
 
 #: Snapshots kept per session: the newest and the one before it (an undo's target).
 SNAPSHOTS_KEPT = 2
 #: The key of PostgreSQL advisory locks the store takes (migrations, retention).
 _LOCK_MIGRATE, _LOCK_RETENTION = 0x7AC7_0001, 0x7AC7_0002
-_URL_SCHEME = re.compile(r"^[A-Za-z][A-Za-z0-9+.\-]*://")
-
-
-class VersionConflictError(Exception):
-    """The session's version is not the one the write was computed for."""
-
-    def __init__(self, current: int) -> None:
-        super().__init__(f"session is at version {current}")
-        self.current = current
-
-
-class SessionGoneError(Exception):
-    """The session does not exist (never created, or deleted)."""
-
-
-class ObjectConflictError(Exception):
-    """An object of that name with other geometry is already registered."""
-
-
-class StoreUnavailableError(Exception):
-    """The database cannot take the request now (locked, busy, down): retry later."""
 
 
 class _IdempotencyRaceError(Exception):
     """Another transaction stored an answer under the same key first."""
 
 
-@dataclass(frozen=True)
-class StoredResponse:
-    """The first answer to an idempotent request, replayed on a retry."""
-
-    fingerprint: str
-    status: int
-    body: bytes
-    headers: dict[str, str] = field(default_factory=dict)
-
-
-@dataclass(frozen=True)
-class IdempotentWrite:
-    """An answer to store under (`scope`, `key`) together with the change it answers."""
-
-    scope: str
-    key: str
-    response: StoredResponse
-
-
-@dataclass(frozen=True)
-class Snapshot:
-    """Derived state after a session's first `n` observations, as opaque bytes."""
-
-    code_version: str
-    body: bytes
-
-
-@dataclass(frozen=True)
-class SessionRecord:
-    """What a session is made of: configuration and ordered observations (JSON dicts)."""
-
-    id: str
-    version: int
-    config: dict[str, Any]
-    observations: tuple[dict[str, Any], ...]
-    created_at: float
-
-
 def _dumps(value: Any) -> str:
     return json.dumps(value, separators=(",", ":"), sort_keys=True, allow_nan=False)
-
-
-def is_url(value: str | Path) -> bool:
-    """True when `value` is written as a URL (``scheme://...``), never a file name."""
-    return bool(_URL_SCHEME.match(str(value).strip()))
-
-
-def database_url(target: str | Path) -> URL:
-    """The SQLAlchemy URL of a ``--db`` value: a URL is taken as one (PostgreSQL, or
-    ``sqlite:///file``), never as a file name; anything else is a SQLite file path.
-
-    >>> database_url("postgresql://u:p@db:5432/tactile").drivername
-    'postgresql+psycopg'
-    >>> database_url("data/tactile.db").database
-    'data/tactile.db'
-    >>> database_url("mysql://u@h/db")
-    Traceback (most recent call last):
-    ...
-    ValueError: unsupported database URL scheme 'mysql': give a postgresql:// URL or a file path
-    """
-    value = str(target).strip()
-    if is_url(value):
-        url = make_url(value)
-        backend = url.get_backend_name()
-        if backend in ("postgresql", "postgres"):
-            return url.set(drivername="postgresql+psycopg")
-        if backend == "sqlite" and url.database and ":memory:" not in url.database:
-            return url.set(drivername="sqlite")
-        raise ValueError(
-            f"unsupported database URL scheme {url.drivername!r}:"
-            " give a postgresql:// URL or a file path"
-        )
-    if value in ("", ":memory:") or "mode=memory" in value or value.startswith("file:"):
-        raise ValueError("an in-memory SQLite database is not shared between threads")
-    return URL.create("sqlite", database=value)
 
 
 class Store:
@@ -217,42 +117,7 @@ class Store:
 
     # -- connections ----------------------------------------------------------------------------
     def _make_engine(self) -> Engine:
-        timeout_s = max(self.busy_timeout_ms / 1000, 1.0)
-        if self.backend == "postgresql":
-            return create_engine(
-                self.url,
-                pool_size=self.pool_size,
-                max_overflow=0,
-                pool_timeout=timeout_s,
-                pool_pre_ping=True,
-                connect_args={"connect_timeout": max(int(timeout_s), 1)},
-            )
-        engine = create_engine(
-            self.url,
-            pool_size=self.pool_size,
-            max_overflow=0,
-            pool_timeout=timeout_s,
-            connect_args={"timeout": self.busy_timeout_ms / 1000, "check_same_thread": False},
-        )
-
-        @event.listens_for(engine, "connect")
-        def _on_connect(dbapi_connection: Any, _record: Any) -> None:
-            dbapi_connection.isolation_level = None  # transactions are begun below
-            cursor = dbapi_connection.cursor()
-            cursor.execute(f"PRAGMA busy_timeout = {int(self.busy_timeout_ms)}")
-            cursor.execute(f"PRAGMA synchronous = {self.synchronous}")
-            cursor.execute("PRAGMA foreign_keys = ON")
-            mode = cursor.execute("PRAGMA journal_mode = WAL").fetchone()[0]
-            cursor.close()
-            if str(mode).lower() != "wal":
-                raise RuntimeError(f"SQLite refused WAL mode (got {mode!r})")
-
-        @event.listens_for(engine, "begin")
-        def _on_begin(conn: Connection) -> None:
-            write = conn.get_execution_options().get("tactile_write", False)
-            conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
-
-        return engine
+        return make_engine(self.url, self.busy_timeout_ms, self.synchronous, self.pool_size)
 
     @property
     def engine(self) -> Engine:
@@ -267,7 +132,7 @@ class Store:
         try:
             with self.engine.connect() as conn:
                 if write:
-                    conn = conn.execution_options(tactile_write=True)
+                    conn = conn.execution_options(**{WRITE_OPTION: True})
                 with conn.begin():
                     yield conn
         except (sa_exc.OperationalError, sa_exc.InterfaceError, sa_exc.TimeoutError) as exc:

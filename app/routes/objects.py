@@ -10,7 +10,7 @@ from app.errors import ConflictError, InvalidInputError, NotFoundError
 from app.routes import PROBLEMS
 from app.schemas import NAME_PATTERN, InputModels, ObjectCreated, ObjectList, ObjectOut
 from app.settings import Settings
-from app.store import ObjectConflictError
+from app.store_types import ObjectConflictError
 
 __all__ = ["build_router"]
 

@@ -65,7 +65,7 @@ def restore(data: bytes) -> Session | None:
     tag, _, body = bytes(data).partition(b"\n")
     if tag.decode(errors="replace") != code_version():
         return None
-    session = pickle.loads(zlib.decompress(body))  # noqa: S301 - written by this code only
+    session = pickle.loads(zlib.decompress(body))  # written by this code only (see above)
     if not isinstance(session, Session):
         return None
     return session

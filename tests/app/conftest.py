@@ -16,7 +16,7 @@ from pathlib import Path
 import pytest
 from sqlalchemy import create_engine, text
 
-from app.store import database_url
+from app.store_types import database_url
 
 DEFAULT_ADMIN = "postgresql://tactile:tactile@127.0.0.1:5432/postgres"
 BACKENDS = ["sqlite", "postgresql"]

@@ -3,8 +3,8 @@
 The server runs on 127.0.0.1 with a port it picks itself. A client posts
 observations (one contact, then misses) and records each acknowledged one;
 the server is killed with SIGKILL while the client is still posting; a new
-server on the same database (a SQLite file, a PostgreSQL database) must hold every acknowledged observation, in
-order (plus at most the one that was in flight).
+server on the same database (a SQLite file, a PostgreSQL database) must hold
+every acknowledged observation, in order (plus at most the one that was in flight).
 """
 
 from __future__ import annotations

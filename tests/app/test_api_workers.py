@@ -13,7 +13,7 @@ from hypothesis import strategies as st
 
 import app.convert
 from app.convert import build_session, catch_up, derive
-from app.store import SessionRecord
+from app.store_types import SessionRecord
 from hardware_sim.world import random_world
 from planner.codec import observation_to_dict
 from planner.recognition.session import Session

@@ -15,18 +15,18 @@ from alembic.migration import MigrationContext
 from sqlalchemy import text
 
 from app import migrations
-from app.store import (
+from app.store import Store
+from app.store_schema import metadata
+from app.store_types import (
     IdempotentWrite,
     ObjectConflictError,
     SessionGoneError,
     SessionRecord,
     Snapshot,
-    Store,
     StoredResponse,
     VersionConflictError,
     database_url,
 )
-from app.store_schema import metadata
 
 THREADS = 8
 PER_THREAD = 4
