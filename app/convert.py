@@ -29,7 +29,7 @@ from planner.codec import (
     session_to_dict,
 )
 from planner.models.library import object_from_dict
-from planner.planning.config import StrategyConfig
+from planner.planning.config import DEFAULT_WORK, StrategyConfig
 from planner.planning.result import Plan
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
@@ -125,6 +125,7 @@ def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:
         name=s["name"],
         depth=s["depth"],
         budget_ms=s["budget_ms"],
+        budget_work=s.get("budget_work", DEFAULT_WORK),  # sessions stored before it existed
         max_paths=s["max_paths"],
         motion_weight=s["motion_weight"],
         grid_size=s["grid_size"],

@@ -125,6 +125,7 @@ class StrategyOut(BaseModel):
     name: str
     depth: int
     budget_ms: float
+    budget_work: float
     max_paths: int
     motion_weight: float
     grid_size: int
@@ -221,6 +222,12 @@ class PlanOut(BaseModel):
     note: str | None = None
     candidates: int = 0
     classes: int = 0
+    work: float = Field(0.0, description="units of work the plan spent")
+    stopped_by: Literal["work", "time"] | None = Field(
+        None,
+        description="what ended the plan early: its work budget (deterministic) or the "
+        "wall-clock cap budget_ms; null: it finished",
+    )
     version: int = Field(ge=1, description="session version the plan was made for")
 
 
@@ -346,8 +353,16 @@ def _strategy_in(settings: Settings) -> type[BaseModel]:
         depth: Annotated[int, Field(ge=1, le=settings.max_lookahead_depth)] = min(
             2, settings.max_lookahead_depth
         )
-        budget_ms: Annotated[float, Field(gt=0, le=settings.max_plan_budget_ms)] = (
-            settings.default_budget_ms
+        budget_ms: Annotated[float, Field(gt=0, le=settings.max_plan_budget_ms)] = Field(
+            settings.default_budget_ms,
+            description="a wall-clock cap on the plan, a safety net: when it bites the plan "
+            "says stopped_by 'time' and may differ from run to run",
+        )
+        budget_work: Annotated[float, Field(gt=0, le=settings.max_plan_budget_work)] = Field(
+            settings.default_budget_work,
+            description="the work a plan may do, in units of about a microsecond on the "
+            "reference machine (outcome cells, search nodes, recognition updates): the plan "
+            "is the same on any machine under any load",
         )
         max_paths: Annotated[int, Field(ge=1, le=settings.max_plan_paths)] = min(
             5, settings.max_plan_paths

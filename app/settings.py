@@ -16,6 +16,8 @@ from typing import Literal
 from pydantic import Field, SecretStr, field_validator, model_validator
 from pydantic_settings import BaseSettings, SettingsConfigDict
 
+from planner.planning.config import DEFAULT_WORK
+
 __all__ = ["Settings"]
 
 
@@ -49,6 +51,9 @@ class Settings(BaseSettings):
     max_observations_per_session: int = Field(100, ge=1, le=100_000)
     max_outliers: int = Field(3, ge=0, le=100)
     max_plan_budget_ms: float = Field(10_000.0, gt=0, le=3_600_000)
+    max_plan_budget_work: float = Field(
+        10_000_000.0, gt=0, le=1e12, description="units of planning work (~us on the reference)"
+    )
     max_lookahead_depth: int = Field(4, ge=1, le=64)
     max_plan_paths: int = Field(50, ge=1, le=10_000)
     max_coordinate: float = Field(1e6, gt=0, le=1e12, description="|x|, |y| and lengths")
@@ -57,7 +62,8 @@ class Settings(BaseSettings):
 
     # defaults of a new session
     default_strategy: str = "lookahead"
-    default_budget_ms: float = Field(500.0, gt=0)
+    default_budget_ms: float = Field(1500.0, gt=0, description="the wall-clock cap of a plan")
+    default_budget_work: float = Field(DEFAULT_WORK, gt=0, description="a plan's work budget")
 
     # access and logs
     api_key: SecretStr | None = Field(None, description="bearer token; None: open")
@@ -100,4 +106,6 @@ class Settings(BaseSettings):
             raise ValueError(f"default_strategy must be one of {list(STRATEGIES)}")
         if self.default_budget_ms > self.max_plan_budget_ms:
             raise ValueError("default_budget_ms must not exceed max_plan_budget_ms")
+        if self.default_budget_work > self.max_plan_budget_work:
+            raise ValueError("default_budget_work must not exceed max_plan_budget_work")
         return self

@@ -67,10 +67,11 @@ class Advice:
     """The planner's answer to "what next?": session `status`, the best `path`
     (None when there is nothing to do or nothing informative), its predicted
     `p_distinguishing` (None for the opening probe, before any hypothesis),
-    planning time `plan_ms`, `truncated` (the time budget stopped the search),
+    planning time `plan_ms`, `truncated` (the budget stopped the search),
     the planner's `note`, `expected_remaining`, the expected touches still
     needed when taking the path, itself included (None when unknown), and
-    `p_forecast`, the recognition's own forecast of P(DM) (None when not made)."""
+    `p_forecast`, the recognition's own forecast of P(DM) (None when not made), and
+    `stopped_by` (``"work"``, ``"time"``: what ended the plan early; None: nothing)."""
 
     status: str
     path: SensingPath | None
@@ -80,6 +81,7 @@ class Advice:
     note: str | None = None
     expected_remaining: float | None = None
     p_forecast: float | None = None
+    stopped_by: str | None = None
 
 
 @dataclass(frozen=True)
@@ -168,6 +170,7 @@ class InProcessService:
             note=result.note,
             expected_remaining=None if best is None else best.expected_remaining,
             p_forecast=None if best is None else best.p_forecast,
+            stopped_by=result.stopped_by,
         )
 
     def observe(self, observation: Observation) -> Update:

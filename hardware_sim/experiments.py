@@ -6,8 +6,10 @@ recognized by the closed loop of :mod:`hardware_sim.client` with the arm and
 sensor of a preset. Trial ``i`` uses the same world and the same hardware noise
 streams for every strategy (seeds derived from ``(seed, i)``), so strategies are
 compared on identical cases, and results do not depend on how trials are batched
-or on the number of workers (as long as the planner's time budget does not bind:
-strategies whose search stops at `budget_ms` depend on the machine's speed).
+or on the number of workers, nor on the machine's load: the planner's budget is
+counted in work (`budget_work`); only its wall-clock cap (`budget_ms`), when it
+bites, depends on the machine's speed (the trial's plans then say
+``stopped_by: "time"``).
 
 Each trial's result (:class:`TrialResult`) says how many touches it took, whether
 it ended localized on the right object and pose, and the planning time per step;
@@ -51,7 +53,7 @@ class ExperimentSpec:
     object (None: drawn by the objects' priors); `preset` the hardware (its
     bounds configure the planner); `workspace` the safe circle; `strategy`
     extra :class:`StrategyConfig` fields shared by all strategies (e.g.
-    ``{"budget_ms": None}``); `pose_slack` (length) added to the hypothesis'
+    ``{"budget_ms": None, "budget_work": None}``); `pose_slack` (length) added to the hypothesis'
     error bound when judging the pose; `trial_timeout` (s of wall time, None: no
     limit) ends a trial as status ``timeout`` (unlocalized, no steps kept)."""
 
@@ -88,7 +90,8 @@ class TrialResult:
     error (Hausdorff distance of posed vertex sets, length; inf when wrong),
     per-step planning time (ms), predicted P(DM) by the outcome model and by the
     recognition's forecast (None for the opening probe, or not forecast) and
-    whether the step was distinguishing, and the rig's travel."""
+    whether the step was distinguishing, the rig's travel, and per step what
+    ended its plan early (``"work"``, ``"time"`` or None)."""
 
     strategy: str
     trial: int
@@ -103,6 +106,7 @@ class TrialResult:
     distinguishing: tuple[bool, ...]
     distance: float
     time: float
+    stopped_by: tuple[str | None, ...] = ()
 
     @property
     def localized(self) -> bool:
@@ -165,6 +169,7 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
         success=bool(success),
         pose_error=error,
         plan_ms=tuple(s.advice.plan_ms for s in rec.steps),
+        stopped_by=tuple(s.advice.stopped_by for s in rec.steps),
         p_distinguishing=tuple(s.advice.p_distinguishing for s in rec.steps),
         p_forecast=tuple(s.advice.p_forecast for s in rec.steps),
         distinguishing=tuple(s.distinguishing for s in rec.steps),

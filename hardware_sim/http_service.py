@@ -307,6 +307,7 @@ class HttpService:
             note=_opt(plan.note),
             expected_remaining=None if best is None else best.expected_remaining,
             p_forecast=None if opening else _opt(best.p_forecast),
+            stopped_by=_opt(plan.stopped_by),
         )
 
     def observe(self, observation: Observation) -> Update:

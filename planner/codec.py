@@ -28,6 +28,7 @@ import math
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING, Any, Literal
 
+from planner.planning.config import DEFAULT_WORK
 from planner.types import (
     Accuracy,
     Contact,
@@ -149,6 +150,7 @@ def strategy_to_dict(strategy: Mapping[str, Any]) -> dict[str, Any]:
         "name": str(strategy["name"]),
         "depth": int(strategy["depth"]),
         "budget_ms": float(strategy["budget_ms"]),
+        "budget_work": float(strategy.get("budget_work", DEFAULT_WORK)),
         "max_paths": int(strategy["max_paths"]),
         "motion_weight": float(strategy["motion_weight"]),
         "grid_size": int(strategy["grid_size"]),
@@ -271,5 +273,7 @@ def plan_to_dict(plan: Plan, version: int, limit: int | None = None) -> dict[str
         "note": None if plan.note is None else str(plan.note),
         "candidates": int(plan.candidates),
         "classes": int(plan.classes),
+        "work": float(plan.work),
+        "stopped_by": plan.stopped_by,
         "version": int(version),
     }

@@ -1,5 +1,6 @@
 """Benchmarks (DESIGN §9) for fixed seeded scenarios: hypotheses left after random
-touches and the time of one observation update (recognition), and the time of one
+touches and the time of one observation update (recognition), the update time
+against the number of earlier observations (growth), and the time and work of one
 plan per strategy after 0, 1, 2, ... touches (planning)."""
 
 from __future__ import annotations
@@ -23,6 +24,7 @@ __all__ = [
     "default_bounds",
     "planning_stats",
     "recognition_stats",
+    "update_growth",
 ]
 
 
@@ -70,12 +72,40 @@ def recognition_stats(
     )
 
 
+def update_growth(
+    models: list[ObjectModel],
+    bounds: SensorBounds,
+    workspace: Workspace,
+    touches: int = 40,
+    trials: int = 2,
+    seed: int = 0,
+) -> dict[int, float]:
+    """The median time (ms) of the n-th observation update of a long session, for n
+    in 1, 2, 5, 10, 20, 40 (up to `touches`): random paths aimed at the object,
+    kept touching after it is localized (as a robot checking its work would)."""
+    rng = np.random.default_rng(seed)
+    times = np.zeros((trials, touches))
+    for trial in range(trials):
+        world = random_world(models, workspace, rng)
+        session = Session(models, bounds, workspace)
+        for k in range(touches):
+            obs, _ = world.execute(world.hitting_path(rng), bounds, rng)
+            start = time.perf_counter()
+            session = session.observe(obs)
+            session.hypotheses  # noqa: B018 - the update is the derivation
+            times[trial, k] = 1e3 * (time.perf_counter() - start)
+    marks = [n for n in (1, 2, 5, 10, 20, 40) if n <= touches]
+    return {n: float(np.median(times[:, n - 1])) for n in marks}
+
+
 @dataclass(frozen=True)
 class PlanningStats:
     """One plan per trial and strategy after `touches` random touches: means and
     largest of the hypothesis, class and candidate counts, and per strategy the
     plan-time percentiles (ms, wall clock, the median of `repeat` runs of each
-    plan) and the share of plans the time budget cut short."""
+    plan), the share of plans the budget cut short (`truncated`), the mean work
+    spent (units, :mod:`planner.planning.budget`) and the share of plans the
+    wall-clock cap stopped (`capped`: only these depend on the machine)."""
 
     touches: int
     trials: int
@@ -87,6 +117,8 @@ class PlanningStats:
     p50_ms: dict[str, float]
     p95_ms: dict[str, float]
     truncated: dict[str, float]
+    work: dict[str, float]
+    capped: dict[str, float]
 
 
 def planning_stats(
@@ -115,6 +147,8 @@ def planning_stats(
     hyps, classes, cands = (np.zeros(shape, dtype=int) for _ in range(3))
     times = {name: np.zeros(shape) for name in strategies}
     cut = {name: np.zeros(shape, dtype=bool) for name in strategies}
+    work = {name: np.zeros(shape) for name in strategies}
+    capped = {name: np.zeros(shape, dtype=bool) for name in strategies}
     for trial in range(trials):
         world = random_world(models, workspace, rng)
         session = Session(models, bounds, workspace)
@@ -142,6 +176,8 @@ def planning_stats(
                     runs.append(1e3 * (time.perf_counter() - start))
                 times[name][k, trial] = float(np.median(runs))
                 cut[name][k, trial] = result.truncated
+                work[name][k, trial] = result.work
+                capped[name][k, trial] = result.stopped_by == "time"
                 # the candidates analysed (fewer when the budget cut the analysis)
                 cands[k, trial] = max(cands[k, trial], result.candidates)
     return [
@@ -156,6 +192,8 @@ def planning_stats(
             p50_ms={n: float(np.percentile(times[n][k], 50)) for n in strategies},
             p95_ms={n: float(np.percentile(times[n][k], 95)) for n in strategies},
             truncated={n: float(cut[n][k].mean()) for n in strategies},
+            work={n: float(work[n][k].mean()) for n in strategies},
+            capped={n: float(capped[n][k].mean()) for n in strategies},
         )
         for k in range(touches + 1)
     ]

@@ -135,7 +135,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         truth=args.truth,
         trial_timeout=args.trial_timeout,
         # the predictions are measured, not the speed: no time budget cuts a plan
-        strategy={"budget_ms": None},
+        strategy={"budget_ms": None, "budget_work": None},
     )
     update, close = progress_bar(spec.trials * len(spec.strategies))
     results = run_experiment(spec, args.workers, None, update)

@@ -30,7 +30,7 @@ def _objects(value: str) -> list:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from planner.types import Workspace
-    from tactile.bench import default_bounds, planning_stats, recognition_stats
+    from tactile.bench import default_bounds, planning_stats, recognition_stats, update_growth
 
     workspace = Workspace((0.0, 0.0), args.radius)
     rows, plans = [], []
@@ -49,7 +49,7 @@ def cmd_bench(args: argparse.Namespace) -> int:
                     workspace,
                     args.strategies,
                     args.plan_trials,
-                    3,
+                    args.plan_touches,
                     args.seed,
                     args.repeat,
                 ):
@@ -57,9 +57,13 @@ def cmd_bench(args: argparse.Namespace) -> int:
             if args.no_recognition:
                 continue
             stats = recognition_stats(models, bounds, workspace, args.trials, 3, args.seed)
+            growth = {}
+            if args.growth:
+                growth = update_growth(models, bounds, workspace, args.growth, 2, args.seed)
             rows.append(
                 {
                     **error,
+                    "update_ms_by_n": growth,
                     "hypotheses_after": stats.hypotheses,
                     "classes_after": stats.classes,
                     "update_p50_ms": stats.update_p50_ms,
@@ -93,6 +97,12 @@ def _print_recognition(rows: list[dict]) -> None:
             f"{r['set']:14s} {err:>12s}  {h}   {c}   "
             f"{r['update_p50_ms']:6.1f} {r['update_p95_ms']:6.1f}"
         )
+    if any(r["update_ms_by_n"] for r in rows):
+        print("\nupdate time (median ms) of the n-th observation of one session:")
+        for r in rows:
+            err = f"{r['position_error']:g}/{r['normal_error_deg']:g}deg"
+            by_n = "  ".join(f"n={n}: {v:.1f}" for n, v in r["update_ms_by_n"].items())
+            print(f"{r['set']:14s} {err:>12s}  {by_n}")
 
 
 def _print_planning(plans: list[dict], strategies: Sequence[str]) -> None:
@@ -103,11 +113,23 @@ def _print_planning(plans: list[dict], strategies: Sequence[str]) -> None:
         hyps = f"{r['hypotheses']:.0f}/{r['hypotheses_max']}"
         cands = f"{r['candidates']:.0f}/{r['candidates_max']}"
         times = "".join(
-            f" {r['p50_ms'][s]:10.1f} {r['p95_ms'][s]:7.1f}{'*' if r['truncated'][s] else ' ':3s}"
-            for s in strategies
+            f" {r['p50_ms'][s]:10.1f} {r['p95_ms'][s]:7.1f}{_cut_mark(r, s):3s}" for s in strategies
         )
-        print(f"{r['set']:14s} {err:>12s} {r['touches']:7d} {hyps:>11s} {cands:>9s}{times}")
-    print("hyps, cands: mean/max over trials; * some plans cut short by the time budget")
+        work = "".join(f" {r['work'][s] / 1e3:7.0f}k" for s in strategies)
+        print(
+            f"{r['set']:14s} {err:>12s} {r['touches']:7d} {hyps:>11s} {cands:>9s}{times}"
+            f"   work{work}"
+        )
+    print(
+        "hyps, cands: mean/max over trials; work: mean units per plan, per strategy;"
+        " * some plans stopped by the work budget, ! some by the wall-clock cap"
+    )
+
+
+def _cut_mark(row: dict, strategy: str) -> str:
+    if row["capped"][strategy]:
+        return "!"
+    return "*" if row["truncated"][strategy] else ""
 
 
 def _picture(value: str) -> str:
@@ -197,13 +219,23 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--radius", type=float, default=200.0, help="safe circle radius")
     bench.add_argument("--json", action="store_true")
     bench.add_argument(
-        "--planning", action="store_true", help="also time plans after 0-3 touches (§9)"
+        "--planning", action="store_true", help="also time plans after 0-5 touches (§9)"
     )
     bench.add_argument("--no-recognition", action="store_true", help="skip the recognition part")
     bench.add_argument(
         "--strategies", nargs="+", default=["pdm", "pruning", "lookahead"], help="planning"
     )
     bench.add_argument("--plan-trials", type=int, default=10, help="planning trials per set")
+    bench.add_argument(
+        "--plan-touches", type=int, default=5, help="plans after 0 ... this many touches"
+    )
+    bench.add_argument(
+        "--growth",
+        type=int,
+        default=0,
+        metavar="N",
+        help="also time the updates of a session touched N times (e.g. 40)",
+    )
     bench.add_argument("--repeat", type=int, default=1, help="runs per plan (median kept)")
     bench.set_defaults(func=cmd_bench)
 

@@ -52,6 +52,25 @@ def _wait_ready(url: str, timeout: float = 60.0) -> None:
 MODES = {"recognize": "Robot", "observe": "Prober"}
 
 
+_TICK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time (user + system) of process `pid` and its living children (Linux /proc;
+    0 elsewhere): a server's workers are its children."""
+    total = 0.0
+    proc = Path("/proc")
+    for stat in proc.glob("[0-9]*/stat"):
+        try:
+            fields = stat.read_text().rsplit(")", 1)[1].split()
+        except OSError:
+            continue
+        this, parent = int(stat.parent.name), int(fields[1])
+        if pid in (this, parent):
+            total += (int(fields[11]) + int(fields[12])) / _TICK
+    return total
+
+
 def _serve(port: int, workers: int, db: str) -> subprocess.Popen[bytes]:
     return subprocess.Popen(
         [
@@ -70,6 +89,24 @@ def _serve(port: int, workers: int, db: str) -> subprocess.Popen[bytes]:
         stderr=subprocess.DEVNULL,
         env={**os.environ, "TACTILE_LOG_LEVEL": "warning"},
     )
+
+
+def _endpoints(prefix: Path) -> dict[str, dict]:
+    """Per-endpoint statistics from locust's CSV (the aggregate row left out)."""
+    with open(f"{prefix}_stats.csv", encoding="utf-8") as f:
+        rows = list(csv.DictReader(f))
+    return {
+        r["Name"]: {
+            "requests": int(r["Request Count"]),
+            "failures": int(r["Failure Count"]),
+            "rps": float(r["Requests/s"]),
+            "p50_ms": float(r["50%"]),
+            "p95_ms": float(r["95%"]),
+            "p99_ms": float(r["99%"]),
+        }
+        for r in rows
+        if r["Name"] != "Aggregated"
+    }
 
 
 def run(
@@ -102,6 +139,7 @@ def run(
                 "LOADTEST_KEEPALIVE": "1" if keepalive else "0",
                 "LOADTEST_HOSTS": ",".join(urls) if hosts > 1 else "",
             }
+            cpu_before = [cpu_seconds(s.pid) for s in servers]
             subprocess.run(
                 [
                     str(bin_dir / "locust"),
@@ -130,25 +168,13 @@ def run(
                 stderr=subprocess.DEVNULL,
                 env=env,
             )
+            cpu = [cpu_seconds(s.pid) - b for s, b in zip(servers, cpu_before, strict=True)]
         finally:
             for server in servers:
                 server.terminate()
             for server in servers:
                 server.wait(timeout=30)
-    with open(f"{prefix}_stats.csv", encoding="utf-8") as f:
-        rows = list(csv.DictReader(f))
-    endpoints = {
-        r["Name"]: {
-            "requests": int(r["Request Count"]),
-            "failures": int(r["Failure Count"]),
-            "rps": float(r["Requests/s"]),
-            "p50_ms": float(r["50%"]),
-            "p95_ms": float(r["95%"]),
-            "p99_ms": float(r["99%"]),
-        }
-        for r in rows
-        if r["Name"] != "Aggregated"
-    }
+    endpoints = _endpoints(prefix)
     failures = sum(e["failures"] for e in endpoints.values())
     per_host = {}
     for h in range(hosts):
@@ -158,9 +184,15 @@ def run(
             "rps": round(sum(e["rps"] for e in mine), 2),
             "failures": sum(e["failures"] for e in mine),
         }
+    plans = sum(e["requests"] for name, e in endpoints.items() if "/plan" in name)
+    touches = sum(e["requests"] for name, e in endpoints.items() if "/observations" in name)
     return {
         "mode": mode,
         "hosts": hosts,
+        "server_cpu_s": round(sum(cpu), 2),
+        # the servers' CPU per touch the robots made (each planned, then observed)
+        "cpu_ms_per_touch": round(1e3 * sum(cpu) / max(touches, 1), 1),
+        "plans": plans,
         "database": "postgresql" if db and db.startswith("postgres") else "sqlite",
         "per_host": per_host,
         "keepalive": keepalive,
@@ -228,6 +260,10 @@ def main(argv: list[str] | None = None) -> int:
                 f"  host {host}: {total['requests']} requests, {total['rps']:.1f} req/s,"
                 f" {total['failures']} failed"
             )
+        print(
+            f"  server CPU: {res['server_cpu_s']:.1f} s, {res['cpu_ms_per_touch']:.1f} ms"
+            f" per touch ({'planned and ' if res['plans'] else ''}observed)"
+        )
         print(f"  failed requests: {res['failures']}")
     return 1 if any(r["failures"] for r in results) else 0
 

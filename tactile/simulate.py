@@ -79,6 +79,21 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         help="how `thesis` picks among its best windows: the nearest origin (the thesis' "
         "hardware, default) or at random (the thesis' simulations)",
     )
+    p.add_argument(
+        "--budget-work",
+        type=float,
+        default=None,
+        metavar="UNITS",
+        help="each plan's work budget (default: the planner's; 0: unlimited); the same "
+        "touches on any machine under any load",
+    )
+    p.add_argument(
+        "--budget-ms",
+        type=float,
+        default=None,
+        metavar="MS",
+        help="each plan's wall-clock cap, a safety net (default: the planner's; 0: none)",
+    )
     where = p.add_mutually_exclusive_group()
     where.add_argument("--workers", type=int, default=None, help="joblib processes (all cores)")
     where.add_argument("--dask", default=None, metavar="ADDRESS", help="Dask scheduler address")
@@ -115,6 +130,17 @@ def progress_bar(total: int) -> tuple[Progress, Callable[[], None]]:
     return update, bar.close
 
 
+def _strategy_settings(args: argparse.Namespace) -> dict[str, Any]:
+    settings: dict[str, Any] = {}
+    if args.thesis_choice != "choose":
+        settings["thesis_choice"] = args.thesis_choice
+    if args.budget_work is not None:
+        settings["budget_work"] = None if args.budget_work == 0 else args.budget_work
+    if args.budget_ms is not None:
+        settings["budget_ms"] = None if args.budget_ms == 0 else args.budget_ms
+    return settings
+
+
 def cmd_simulate(args: argparse.Namespace) -> int:
     """Run ``tactile simulate``; prints the table (or JSON) on stdout."""
     try:
@@ -129,9 +155,7 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             truth=args.truth,
             trial_timeout=getattr(args, "trial_timeout", None),
             placement=args.placement,
-            strategy=(
-                {} if args.thesis_choice == "choose" else {"thesis_choice": args.thesis_choice}
-            ),
+            strategy=_strategy_settings(args),
             recognition=(
                 {}
                 if args.error_disk is None

@@ -56,7 +56,7 @@ def analysed(session: Session):
         session.sensor,
         session.workspace,
         (WORKSPACE.radius, 0.0),
-        StrategyConfig(budget_ms=None),
+        StrategyConfig(budget_ms=None, budget_work=None),
         0,
         observations=session.observations,
     )
@@ -79,8 +79,8 @@ def small_spec(**kw) -> ExperimentSpec:
         "seed": 3,
         "workspace": SMALL_WS,
         "max_touches": 6,
-        # no time budget: plans then do not depend on how loaded the machine is
-        "strategy": {"budget_ms": None},
+        # no budget at all: the plans are the same however it is counted
+        "strategy": {"budget_ms": None, "budget_work": None},
     }
     return ExperimentSpec(**{**base, **kw})
 

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.planning.bitsets import SurvivorTable
-from planner.planning.budget import Deadline
+from planner.planning.budget import Budget
 from planner.planning.candidate_generation import generate_candidates
 from planner.planning.candidates import Candidates
 from planner.planning.config import StrategyConfig
@@ -72,12 +72,12 @@ def analyse(
     *,
     observations: Sequence[Observation] = (),
     extra_paths: Sequence[SensingPath] = (),
-    deadline: Deadline | None = None,
+    budget: Budget | None = None,
 ) -> Analysis:
     """Candidates (the strategy's own first, then `extra_paths`, then the general
     set), their predicted outcomes, survivor sets and scores (world frame).
 
-    With a `deadline`, outcomes are worked out block by block of candidates and
+    With a `budget`, outcomes are worked out block by block of candidates and
     stop (`truncated`) once it passes; the first block is always done."""
     config = config or StrategyConfig()
     gen = as_generator(rng)
@@ -108,13 +108,13 @@ def analyse(
         cands = cands.subset(fresh)
     outcomes: list[Outcomes] = []
     bits: list[np.ndarray] = []
-    deadline = deadline or Deadline()
+    budget = budget or Budget()
     # anytime: candidates in blocks, best first (the strategy's own, extra, general);
     # when the budget runs out, the blocks done so far are the candidates
     size = max(_BLOCK, _BLOCK_ELEMENTS // len(posed))
-    block = len(cands) if deadline.end == np.inf else size
+    block = len(cands) if budget.unlimited else size
     for lo in range(0, max(len(cands), 1), max(block, 1)):
-        if outcomes and deadline.expired():
+        if outcomes and budget.exhausted():
             break
         part = cands.subset(np.arange(lo, min(lo + block, len(cands))))
         outcomes.append(
@@ -122,6 +122,7 @@ def analyse(
                 posed, part.origins, part.directions, part.lengths, sensor, config.outcome
             )
         )
+        budget.spend("outcome_cell", len(part) * len(posed))
         bits.append(
             pin_families(
                 hypotheses,

@@ -11,16 +11,22 @@ from planner.errors import PlannerError
 from planner.planning.candidate_generation import CandidateConfig
 from planner.planning.outcomes import OutcomeConfig
 
-__all__ = ["STRATEGIES", "THESIS_CHOICES", "StrategyConfig"]
+__all__ = ["DEFAULT_WORK", "STRATEGIES", "THESIS_CHOICES", "StrategyConfig"]
 
 STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
 THESIS_CHOICES = ("choose", "random")
+#: The default work budget: about 400 ms of planning on the reference machine (its
+#: wall-clock cap, `budget_ms`, defaults to well above that: a safety net only).
+DEFAULT_WORK = 400_000.0
 
 
 @dataclass(frozen=True)
 class StrategyConfig:
-    """How to plan: strategy `name`, lookahead `depth` (touches), `budget_ms`
-    (None: unlimited; it covers the whole plan: candidates, outcomes, search),
+    """How to plan: strategy `name`, lookahead `depth` (touches), `budget_work`
+    (units of work, :mod:`planner.planning.budget`; None: unlimited; it covers the
+    whole plan: outcomes, search, forecast, and makes the plan the same on any
+    machine under any load), `budget_ms` (a wall-clock cap on the same, a safety
+    net only; None: none),
     `optimal_max_classes` (the most classes ``optimal`` solves exactly, and the
     most for which strategies that do not search still score their paths `depth`
     touches deep), `max_paths` in the ranked list,
@@ -35,7 +41,8 @@ class StrategyConfig:
 
     name: str = "lookahead"
     depth: int = 2
-    budget_ms: float | None = 500.0
+    budget_ms: float | None = 1500.0
+    budget_work: float | None = DEFAULT_WORK
     optimal_max_classes: int = 12
     max_paths: int = 5
     motion_weight: float = 0.0
@@ -66,6 +73,10 @@ class StrategyConfig:
             self.budget_ms > 0 and math.isfinite(self.budget_ms)
         ):
             raise PlannerError("must be a finite number > 0", field="strategy.budget_ms")
+        if self.budget_work is not None and not (
+            self.budget_work > 0 and math.isfinite(self.budget_work)
+        ):
+            raise PlannerError("must be a finite number > 0", field="strategy.budget_work")
         if not (math.isfinite(self.motion_weight) and self.motion_weight >= 0):
             raise PlannerError("must be a finite number >= 0", field="strategy.motion_weight")
 

@@ -16,7 +16,7 @@ or a miss); the session observes that outcome; the touch is distinguishing
 when one class is left. ``p_forecast = sum_k w(k) [one class left | k's
 outcome]``, the class weights being the session's probabilities. One
 recognition update per class, so it is offered for the first few ranked
-paths only, and stops at the plan's time budget.
+paths only, and stops when the plan's budget is spent.
 
 World frame, lengths in the object files' unit.
 """
@@ -31,7 +31,7 @@ import numpy as np
 
 from planner.errors import InvalidObservationError
 from planner.planning.analysis import Analysis
-from planner.planning.budget import Deadline
+from planner.planning.budget import Budget
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
 from planner.planning.result import Plan
@@ -49,16 +49,16 @@ __all__ = [
 def forecast_distinguishing(
     session: Session,
     path: SensingPath,
-    deadline: Deadline | None = None,
+    budget: Budget | None = None,
     config: OutcomeConfig | None = None,
 ) -> float | None:
     """Probability that the touch along `path` leaves one equivalence class, as
     the session's recognition would judge each class' predicted outcome (None
-    when there is nothing to forecast or the `deadline` passed first)."""
+    when there is nothing to forecast or the `budget` passed first)."""
     hypotheses = session.hypotheses
     if not hypotheses:
         return None
-    deadline = deadline or Deadline()
+    budget = budget or Budget()
     posed = pose_hypotheses(hypotheses, session.models_by_name)
     out = predict_outcomes(
         posed,
@@ -74,12 +74,14 @@ def forecast_distinguishing(
     _, first = np.unique(cls, return_index=True)
     total = 0.0
     for k, row in zip(cls[first], first, strict=True):
-        if deadline.expired():
+        if budget.exhausted():
             return None
         contact = None
         if out.hit[0, row]:
             contact = Contact(tuple(out.point[0, row]), tuple(out.normal[0, row]))
         after = session.observe(Observation(path, contact)).hypotheses
+        budget.spend("recognition_update")
+        budget.spend("recognition_hypothesis", len(hypotheses))
         if len({h.equivalence_class for h in after}) == 1:
             total += float(weight[k])
     return min(total / float(weight.sum()), 1.0)
@@ -89,27 +91,32 @@ def with_forecast(
     plan: Plan,
     session: Session,
     count: int = 1,
-    budget_ms: float | None = None,
+    budget: Budget | None = None,
     config: OutcomeConfig | None = None,
 ) -> Plan:
     """`plan` with `p_forecast` set on its first `count` paths (refining paths
-    included), within what is left of `budget_ms` after the plan itself; the
-    forecast's time is added to `elapsed_ms`."""
+    included), within what is left of the plan's `budget` (None: unlimited); the
+    forecast's time is added to `elapsed_ms`, its work to `work`."""
     if not count or not plan.paths or not session.hypotheses:
         return plan
     start = time.perf_counter()
-    left = None if budget_ms is None else max(budget_ms - plan.elapsed_ms, 0.0)
-    deadline = Deadline.after_ms(left)
+    budget = budget or Budget()
     paths = list(plan.paths)
     for i, p in enumerate(paths[:count]):
         if p.p_forecast is not None:  # ranked by the recognition: forecast already
             continue
-        value = forecast_distinguishing(session, p.path, deadline, config)
+        value = forecast_distinguishing(session, p.path, budget, config)
         if value is None:
             break
         paths[i] = dataclasses.replace(p, p_forecast=value)
     elapsed = plan.elapsed_ms + (time.perf_counter() - start) * 1000.0
-    return dataclasses.replace(plan, paths=tuple(paths), elapsed_ms=elapsed)
+    return dataclasses.replace(
+        plan,
+        paths=tuple(paths),
+        elapsed_ms=elapsed,
+        work=budget.units,
+        stopped_by=plan.stopped_by or budget.stopped_by,
+    )
 
 
 #: Most candidate paths, and most classes, the recognition is asked about when the
@@ -132,7 +139,7 @@ class RecognitionRanking:
 
 
 def recognition_ranking(
-    session: Session, found: Analysis, deadline: Deadline | None = None
+    session: Session, found: Analysis, budget: Budget | None = None
 ) -> RecognitionRanking:
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
@@ -141,8 +148,8 @@ def recognition_ranking(
     of the most probable classes predicts its nominal outcome on a path with its
     best member (the cast of the analysis); the session observes it; the classes left are counted.
     ``E[classes] = sum_k w(k) classes(after k's outcome)``. The first path is
-    always judged, the rest while the `deadline` allows."""
-    deadline = deadline or Deadline()
+    always judged, the rest while the `budget` allows."""
+    budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
     # the paths aimed at the classes' differences in the order they were made (one
@@ -156,9 +163,11 @@ def recognition_ranking(
     best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
     rows, p_dm, expected = [], [], []
     for c in shortlist:
-        if rows and deadline.expired():
+        if rows and budget.exhausted():
             break
         left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
+        budget.spend("recognition_update", len(best))
+        budget.spend("recognition_hypothesis", len(best) * len(posed.weight))
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))

@@ -22,7 +22,7 @@ from typing import Any
 import numpy as np
 
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
-from planner.planning.budget import Deadline
+from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import recognition_ranking, with_forecast
 from planner.planning.probes import opening_probe
@@ -43,6 +43,8 @@ from planner.types import (
 
 __all__ = ["plan", "plan_session"]
 
+#: The share of a plan's work kept for the forecast of its first paths.
+FORECAST_SHARE = 0.25
 #: Smallest share of the expected error disk a refining path must remove.
 _REFINE_GAIN = 0.05
 
@@ -54,8 +56,13 @@ def plan_session(
     rng: np.random.Generator | int | None = None,
 ) -> Plan:
     """:func:`plan` on a session's state, its first
-    `config.forecast` paths forecast within the same time budget."""
+    `config.forecast` paths forecast within the same budget."""
     config = config or StrategyConfig()
+    total = config.budget_work
+    # the forecast (the probability to act on) keeps its share of the work: the search
+    # may not spend it, and the forecast may spend what the search left
+    share = total if total is None or not config.forecast else total * (1 - FORECAST_SHARE)
+    budget = Budget(share, config.budget_ms)
     result = plan(
         session.hypotheses,
         session.models,
@@ -67,8 +74,10 @@ def plan_session(
         observations=session.observations,
         localized=session.status == "localized",
         session=session,
+        budget=budget,
     )
-    return with_forecast(result, session, config.forecast, config.budget_ms, config.outcome)
+    budget.raise_to(total)
+    return with_forecast(result, session, config.forecast, budget, config.outcome)
 
 
 def plan(
@@ -84,14 +93,15 @@ def plan(
     extra_paths: Sequence[SensingPath] = (),
     localized: bool | None = None,
     session: Session | None = None,
+    budget: Budget | None = None,
 ) -> Plan:
     """Rank the next sensing paths for a hypothesis set (world frame).
 
     `hypotheses` carry probabilities (normalized here) and equivalence classes;
     `observations` (the session's, in order) tell whether anything was touched
     yet and give the contacts the thesis opening needs; `extra_paths` join the
-    candidates; `rng` (or a seed; default 0) drives the random choices. The
-    time budget (`config.budget_ms`) covers the whole call.
+    candidates; `rng` (or a seed; default 0) drives the random choices; the
+    `budget` (default: `config`'s) covers the whole call.
 
     With no hypothesis and no contact the plan is the opening probe (status
     ``awaiting_contact``); with contacts but no hypothesis, empty
@@ -102,16 +112,16 @@ def plan(
     candidates are ranked on what the recognition of `session` predicts
     (:func:`~planner.planning.forecast.recognition_ranking`), then refining paths
     are offered; only when nothing can change the hypotheses is the plan empty,
-    with a note saying why.
-    """
+    with a note saying why."""
     start = time.perf_counter()
     config = config or StrategyConfig()
     gen = as_generator(rng)
-    deadline = Deadline.after_ms(config.budget_ms)
+    budget = budget or Budget(config.budget_work, config.budget_ms)
     contacts = [o.contact for o in observations if o.contact is not None]
 
     def finish(status: str, paths: Sequence[PlannedPath], **kw: Any) -> Plan:
         elapsed = (time.perf_counter() - start) * 1000.0
+        kw.update(work=budget.units, stopped_by=budget.stopped_by)
         return Plan(status, kw.pop("truncated", False), elapsed, tuple(paths), config.name, **kw)
 
     if not hypotheses:
@@ -135,7 +145,7 @@ def plan(
         gen,
         observations=observations,
         extra_paths=extra_paths,
-        deadline=deadline,
+        budget=budget,
     )
     if classes == 1:  # one class, its bound short of the required accuracy
         paths, note = _refining(
@@ -151,17 +161,18 @@ def plan(
         source=found.candidates.source,
         tier=found.candidates.tier,
         rng=gen,
-        deadline=deadline,
+        budget=budget,
     )
     paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
     note = ranking.note
     if not paths:
         paths, note = _uninformative(
             found, hypotheses, models_by_name(models), contacts, sensor, ranking, config, gen,
-            session, deadline,
+            session, budget,
         )  # fmt: skip
-    if found.truncated:
-        note = "; ".join(filter(None, [note, "candidates cut at the time budget"]))
+    note = (
+        "; ".join(filter(None, [note, found.truncated and "candidates cut at the budget"])) or None
+    )
     return finish(
         "ambiguous",
         paths,
@@ -182,7 +193,7 @@ def _uninformative(
     config: StrategyConfig,
     rng: np.random.Generator,
     session: Session | None,
-    deadline: Deadline,
+    budget: Budget,
 ) -> tuple[list[PlannedPath], str | None]:
     """The outcome model calls no candidate informative. The thesis refines, then
     takes its best window, as the thesis did; the other strategies rank on the
@@ -194,7 +205,7 @@ def _uninformative(
         return paths, note
     paths, note = [], ranking.note
     if session is not None:
-        paths, note = _by_recognition(found, session, ranking, config, deadline)
+        paths, note = _by_recognition(found, session, ranking, config, budget)
     if not paths:
         paths, note = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
     return paths, note
@@ -301,12 +312,12 @@ def _by_recognition(
     session: Session,
     ranking: Ranking,
     config: StrategyConfig,
-    deadline: Deadline,
+    budget: Budget,
 ) -> tuple[list[PlannedPath], str | None]:
     """No candidate informative for the outcome model: the shortlisted paths after
     which the recognition predicts fewer classes, best first (P(DM) by the
     recognition, then expected classes left), scored by the recognition."""
-    judged = recognition_ranking(session, found, deadline)
+    judged = recognition_ranking(session, found, budget)
     useful = judged.expected_classes < judged.current - 1e-9
     # the recognition's P(DM) is the forecast of the first `config.forecast` paths
     paths = [

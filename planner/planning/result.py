@@ -70,9 +70,12 @@ class PlannedPath:
 @dataclass(frozen=True)
 class Plan:
     """Ranked paths, best first, with the plan-level `status` (one of
-    :data:`PLAN_STATUSES`), `truncated` (the time budget stopped the search),
+    :data:`PLAN_STATUSES`), `truncated` (the budget stopped the search),
     `elapsed_ms`, the `strategy` that ranked them, a `note` when the strategy
-    had to deviate or found nothing, and the numbers of candidates and classes."""
+    had to deviate or found nothing, and the numbers of candidates and classes;
+    `work` (units the plan spent, :mod:`planner.planning.budget`) and
+    `stopped_by` (what ended it early: ``"work"``, the deterministic budget;
+    ``"time"``, the wall-clock cap; None: nothing)."""
 
     status: str
     truncated: bool
@@ -82,6 +85,8 @@ class Plan:
     note: str | None = None
     candidates: int = 0
     classes: int = 0
+    work: float = 0.0
+    stopped_by: str | None = None
 
     @property
     def best(self) -> PlannedPath | None:

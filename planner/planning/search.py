@@ -44,7 +44,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, unpack_bits
-from planner.planning.budget import Deadline, OutOfTimeError
+from planner.planning.budget import Budget, OutOfBudgetError
 from planner.planning.search_nodes import Node, SearchSpace
 
 __all__ = ["SearchResult", "expected_remaining", "state_value"]
@@ -63,8 +63,8 @@ class SearchResult:
 
     `value` (C,) is exact where `exact` is set and a lower bound elsewhere
     (paths pruned as outside the best `top_k`, or not reached before the
-    deadline); inf for paths uninformative at the root. `truncated` says the
-    deadline stopped the search; `states` counts the states expanded.
+    budget); inf for paths uninformative at the root. `truncated` says the
+    budget stopped the search; `states` counts the states expanded.
     """
 
     value: np.ndarray
@@ -76,18 +76,18 @@ class SearchResult:
 class _Search:
     """E(S) by branch and bound over the nodes of a :class:`SearchSpace`, memoized
     on the state (`exact`) and on (state, depth) (`limited`), stopped by
-    `deadline`."""
+    `budget`."""
 
-    def __init__(self, table: SurvivorTable, deadline: Deadline) -> None:
+    def __init__(self, table: SurvivorTable, budget: Budget) -> None:
         self.space = SearchSpace(table)
         self.n = table.n_classes
-        self.deadline = deadline
+        self.budget = budget
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
 
     def value(self, state: np.ndarray, depth: int | None) -> float:
         """E(S) searched `depth` touches deep (None: exact)."""
-        self.deadline.check()
+        self.budget.check("search_node")
         key = state.tobytes()
         known = self.exact.get(key)
         if known is not None:
@@ -150,7 +150,7 @@ class _Search:
     def values_one(self, sets: np.ndarray) -> np.ndarray:
         """E(T) searched one touch deep for each set T (n, W), memoized: the best
         bound min_P (1 + w(open | T)) / (1 - w(stay | T)), or 0 if T is settled."""
-        self.deadline.check()
+        self.budget.check("leaf_set", 0)
         out = np.empty(len(sets))
         missing: dict[bytes, list[int]] = {}  # each set not known yet, once
         for i, state in enumerate(sets):
@@ -167,14 +167,14 @@ class _Search:
             # similar sizes together, each batch padded to its largest set and kept
             # within _BATCH_ELEMENTS words
             order = np.argsort(size, kind="stable")
-            budget = max(1, _BATCH_ELEMENTS // (len(self.space.leaf) * self.space.bits.shape[-1]))
+            room = max(1, _BATCH_ELEMENTS // (len(self.space.leaf) * self.space.bits.shape[-1]))
             lo = 0
             while lo < len(order):
                 hi = lo + 1
-                while hi < len(order) and (hi + 1 - lo) * size[order[hi]] <= budget:
+                while hi < len(order) and (hi + 1 - lo) * size[order[hi]] <= room:
                     hi += 1
-                self.deadline.check()
                 pick = order[lo:hi]
+                self.budget.check("leaf_set", len(pick))
                 m = int(size[pick].max())
                 # members of each set, padded with -1 (one row per set)
                 members = np.argsort(~unpack_bits(todo[pick], self.n), axis=1, kind="stable")
@@ -233,7 +233,7 @@ class _Search:
                 break
             try:
                 v, done = self.path_value(node, int(c), child_depth, threshold - extra[c])
-            except OutOfTimeError:
+            except OutOfBudgetError:
                 truncated = True
                 break
             value[c] = v
@@ -256,7 +256,7 @@ class _Search:
         nearly all of them anyway: counting one touch per child the bounds of paths
         with close values prune little.) Stops at the first path whose bound reaches
         the top_k-th exact objective; fills `value` and `exact` of the paths done and
-        returns whether the deadline stopped it."""
+        returns whether the budget stopped it."""
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
         while lo < len(order):
@@ -273,7 +273,7 @@ class _Search:
             at, k = np.nonzero(node.open[group])
             try:
                 values = self.values_one(node.child[group[at], k])
-            except OutOfTimeError:
+            except OutOfBudgetError:
                 return True
             # E_P(S) = (1 + sum_h w(h|S) E(S_P(h) & S)) / (1 - w_stay)
             total = 1.0 + np.bincount(at, weights=node.weight[k] * values, minlength=len(group))
@@ -327,7 +327,7 @@ def expected_remaining(
     paths: np.ndarray | None = None,
     top_k: int | None = None,
     extra_cost: np.ndarray | None = None,
-    deadline: Deadline | None = None,
+    budget: Budget | None = None,
     state: np.ndarray | None = None,
 ) -> SearchResult:
     """Expected remaining touches E_P(S) of each root path P (this touch included).
@@ -336,7 +336,7 @@ def expected_remaining(
     only for a few classes); `paths` limits the root paths scored (inner nodes
     always use every path); with `top_k`, only the best `top_k` by
     ``E_P + extra_cost`` are guaranteed exact and the others may keep their
-    lower bound; `deadline` stops the search (anytime: the best found so far,
+    lower bound; `budget` stops the search (anytime: the best found so far,
     `truncated` set); `state` is the hypothesis set S (bool over classes or a
     bitset; default all classes).
 
@@ -349,7 +349,7 @@ def expected_remaining(
     """
     if depth is not None and depth < 1:
         raise ValueError("depth must be >= 1 or None")
-    search = _Search(table, deadline or Deadline())
+    search = _Search(table, budget or Budget())
     root_paths = np.arange(table.n_paths) if paths is None else np.asarray(paths, dtype=int)
     extra = np.zeros(table.n_paths) if extra_cost is None else np.asarray(extra_cost, float)
     return search.rank(_full_state(table, state), depth, root_paths, top_k, extra)
@@ -360,15 +360,15 @@ def state_value(
     depth: int | None = None,
     *,
     state: np.ndarray | None = None,
-    deadline: Deadline | None = None,
+    budget: Budget | None = None,
 ) -> float:
     """E(S) itself: expected touches still needed from state S under the best
     policy searched `depth` touches deep (None: exact).
 
-    Raises TimeoutError when the deadline passes first.
+    Raises TimeoutError when the budget passes first.
     """
-    search = _Search(table, deadline or Deadline())
+    search = _Search(table, budget or Budget())
     try:
         return search.value(_full_state(table, state), depth)
-    except OutOfTimeError as exc:
-        raise TimeoutError("search did not finish before the deadline") from exc
+    except OutOfBudgetError as exc:
+        raise TimeoutError("search did not finish before the budget") from exc

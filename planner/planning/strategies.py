@@ -17,7 +17,7 @@ import numpy as np
 
 from planner.planning.analysis import as_generator
 from planner.planning.bitsets import SurvivorTable
-from planner.planning.budget import Deadline
+from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.scoring import (
     UNINFORMATIVE,
@@ -53,14 +53,14 @@ def rank_candidates(
     source: np.ndarray | None = None,
     tier: np.ndarray | None = None,
     rng: np.random.Generator | int | None = None,
-    deadline: Deadline | None = None,
+    budget: Budget | None = None,
 ) -> Ranking:
     """Apply the configured strategy to an outcome matrix (C paths x K classes).
 
     `motion` (C,) defaults to zero; `source` (C,) names each candidate's origin
     (``random`` draws and thesis ``probe``/``window`` rows are what those
     strategies pick from) and `tier` (C,) their rank (the windows' level, default
-    0); `deadline` bounds the search. Expected remaining
+    0); `budget` bounds the search. Expected remaining
     touches are computed for the first `max_paths` of the order when the
     strategy did not compute them itself (``random``, ``thesis``, ``pdm``,
     ``pruning``): searched `depth` touches deep when there are at most
@@ -77,7 +77,7 @@ def rank_candidates(
         np.full(n, "", dtype="<U12") if source is None else np.asarray(source),
         np.zeros(n, dtype=int) if tier is None else np.asarray(tier, dtype=int),
         as_generator(rng),
-        deadline or Deadline.after_ms(config.budget_ms),
+        budget or Budget(config.budget_work, config.budget_ms),
     )
     ranking = _STRATEGIES[config.name](ctx)
     if ranking.note is None and not len(ranking.order):
@@ -92,7 +92,7 @@ def rank_candidates(
     if len(top) and not ranking.exact[top].all():
         # strategies that do not search: `depth` deep on small sets, else one touch deep
         depth = config.depth if table.n_classes <= config.optimal_max_classes else 1
-        result = expected_remaining(table, depth, paths=top, deadline=ctx.deadline)
+        result = expected_remaining(table, depth, paths=top, budget=ctx.budget)
         value = np.where(ranking.exact, ranking.expected_remaining, result.value)
         exact = ranking.exact | result.exact
         return Ranking(
@@ -105,7 +105,7 @@ def rank_candidates(
 class _Context:
     """What every strategy reads: the settings, the class survivor table and its
     scores, and per candidate (C,) the motion cost, source and tier; the random
-    generator and the deadline."""
+    generator and the budget."""
 
     config: StrategyConfig
     table: SurvivorTable
@@ -114,7 +114,7 @@ class _Context:
     source: np.ndarray
     tier: np.ndarray
     rng: np.random.Generator
-    deadline: Deadline
+    budget: Budget
 
 
 def _informative(ctx: _Context, rows: np.ndarray | None = None) -> np.ndarray:
@@ -150,13 +150,13 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         paths=ok,
         top_k=ctx.config.max_paths,
         extra_cost=ctx.config.motion_weight * ctx.motion,
-        deadline=ctx.deadline,
+        budget=ctx.budget,
     )
     # cost = E_P + motion_weight * motion_cost; exact values rank before bounds
     cost = combined_objective(result.value, ctx.motion, ctx.config.motion_weight)
     keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok], ~result.exact[ok])
     if result.truncated:
-        note = "; ".join(filter(None, [note, "search stopped at the time budget"]))
+        note = "; ".join(filter(None, [note, "search stopped at the budget"]))
     return Ranking(ok[np.lexsort(keys)], result.value, result.exact, result.truncated, note)
 
 

@@ -68,7 +68,11 @@ def test_openapi_lists_every_endpoint_with_stable_operation_ids(client):
 
 def test_limits_from_settings_appear_in_the_schema(tmp_path):
     settings = dict(
-        max_outline_vertices=40, max_objects_per_session=3, max_plan_budget_ms=750.0, max_holes=2
+        max_outline_vertices=40,
+        max_objects_per_session=3,
+        max_plan_budget_ms=750.0,
+        default_budget_ms=500.0,
+        max_holes=2,
     )
     with api(tmp_path, **settings) as c:
         schemas = c.get("/openapi.json").json()["components"]["schemas"]
@@ -345,7 +349,8 @@ def test_plan_ranks_paths_with_every_field(client):
 
 def test_plan_forecasts_the_best_path_unless_told_not_to(client):
     for forecast, expect in ((None, 1), (0, 0), (2, 2)):
-        body = {} if forecast is None else {"strategy": {"forecast": forecast, "budget_ms": 2000}}
+        strategy = {"forecast": forecast, "budget_work": 3e6, "budget_ms": 10000}
+        body = {} if forecast is None else {"strategy": strategy}
         s = create_session(client, **body)
         assert s["strategy"]["forecast"] == (1 if forecast is None else forecast)
         client.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM)

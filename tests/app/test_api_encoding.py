@@ -133,7 +133,7 @@ def test_plan_numbers_take_the_schema_types_and_non_finite_scores_are_null():
         b'"p_distinguishing":1.0,"p_informative":1.0,"expected_pruning":0.0,'
         b'"expected_remaining":null,"motion_cost":null,"source":"general","expected_eps_t":2.0,'
         b'"p_forecast":null,"scored_by":"outcome_model"}],"strategy":"pdm","note":null,'
-        b'"candidates":7,"classes":2,"version":4}'
+        b'"candidates":7,"classes":2,"work":0.0,"stopped_by":null,"version":4}'
     )
 
 

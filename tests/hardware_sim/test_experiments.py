@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import sys
+import threading
 from dataclasses import replace
 
 import numpy as np
@@ -121,6 +122,36 @@ def test_trials_are_reproducible_across_worker_counts(sequential_results):
     ]
 
 
+def test_a_work_budget_gives_the_same_touches_on_a_loaded_machine():
+    """The same seeded trials with a work budget that binds, once with a thread
+    spinning on the CPU beside them (the plans' wall time grows, their work does not)."""
+    spec = small_spec(
+        models=tuple(load_objects("thesis_like")),
+        strategies=("lookahead",),
+        trials=3,
+        workspace=Workspace((0.0, 0.0), 200.0),
+        strategy={"budget_work": 40_000, "budget_ms": None},
+    )
+    quiet = run_experiment(spec, workers=1)
+    stop = threading.Event()
+
+    def spin() -> None:
+        x = 0
+        while not stop.is_set():
+            x += 1
+
+    load = threading.Thread(target=spin, daemon=True)
+    load.start()
+    try:
+        loaded = run_experiment(spec, workers=1)
+    finally:
+        stop.set()
+        load.join()
+    assert _comparable(loaded) == _comparable(quiet)
+    assert any("work" in r.stopped_by for r in quiet)  # the budget did bind
+    assert sum(map(sum, (r.plan_ms for r in loaded))) > 0
+
+
 def test_every_strategy_sees_the_same_worlds(sequential_results):
     truths = {(r.trial, r.truth) for r in sequential_results}
     assert len(truths) == 3
@@ -172,7 +203,7 @@ def test_thesis_in_its_own_setting_takes_its_window_where_nothing_is_informative
         models,
         spec.preset.bounds,
         spec.workspace,
-        StrategyConfig(name="thesis", budget_ms=None),
+        StrategyConfig(name="thesis", budget_ms=None, budget_work=None),
         RecognitionConfig(**rc),
         rng=np.random.default_rng(_seed(spec, 0, 2)),
     )

@@ -13,18 +13,23 @@ from tactile.cli import main
 
 
 def test_bench_json_reports_every_set_and_error_case(capsys):
-    assert main(["bench", "--sets", "symmetric", "--trials", "2", "--json"]) == 0
+    assert main(["bench", "--sets", "symmetric", "--trials", "2", "--growth", "5", "--json"]) == 0
     rows = json.loads(capsys.readouterr().out)["recognition"]
     assert [r["set"] for r in rows] == ["symmetric", "symmetric"]
     for r in rows:
+        assert list(r["update_ms_by_n"]) == ["1", "2", "5"]  # JSON keys
+        assert all(v > 0 for v in r["update_ms_by_n"].values())
         assert len(r["hypotheses_after"]) == 3 and len(r["classes_after"]) == 3
         assert all(c <= h for c, h in zip(r["classes_after"], r["hypotheses_after"], strict=True))
         assert r["update_p95_ms"] >= r["update_p50_ms"] > 0
 
 
-def test_bench_planning_reports_plan_times_after_0_to_3_touches(capsys):
+def test_bench_planning_reports_plan_times_and_work_after_0_to_3_touches(capsys):
     argv = ["bench", "--sets", "symmetric", "--planning", "--no-recognition", "--json"]
-    assert main([*argv, "--plan-trials", "1", "--strategies", "pdm", "pruning"]) == 0
+    assert (
+        main([*argv, "--plan-trials", "1", "--plan-touches", "3", "--strategies", "pdm", "pruning"])
+        == 0
+    )
     out = json.loads(capsys.readouterr().out)
     assert "recognition" not in out
     rows = out["planning"]
@@ -36,7 +41,9 @@ def test_bench_planning_reports_plan_times_after_0_to_3_touches(capsys):
         assert set(r["p50_ms"]) == set(r["p95_ms"]) == {"pdm", "pruning"}
         assert all(r["p95_ms"][s] >= r["p50_ms"][s] > 0 for s in ("pdm", "pruning"))
         assert r["classes"] <= r["hypotheses"] <= r["hypotheses_max"]
+        assert set(r["work"]) == set(r["capped"]) == {"pdm", "pruning"}
     assert rows[0]["hypotheses"] == 0 and rows[1]["candidates"] > 0
+    assert any(r["work"]["pdm"] > 0 for r in rows[1:])  # (localized plans do no work)
 
 
 def test_import_mesh_writes_an_object_file(tmp_path, capsys):

@@ -23,6 +23,7 @@ from .path_in import PathIn
 from .path_out import PathOut
 from .plan_out import PlanOut
 from .plan_out_status import PlanOutStatus
+from .plan_out_stopped_by_type_0 import PlanOutStoppedByType0
 from .planned_path_out import PlannedPathOut
 from .planned_path_out_scored_by import PlannedPathOutScoredBy
 from .pose_out import PoseOut
@@ -66,6 +67,7 @@ __all__ = (
     "PlannedPathOutScoredBy",
     "PlanOut",
     "PlanOutStatus",
+    "PlanOutStoppedByType0",
     "PoseOut",
     "Problem",
     "SensorIn",

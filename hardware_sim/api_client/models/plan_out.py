@@ -9,6 +9,7 @@ from attrs import field as _attrs_field
 from ..types import UNSET, Unset
 
 from ..models.plan_out_status import PlanOutStatus
+from ..models.plan_out_stopped_by_type_0 import PlanOutStoppedByType0
 from ..types import UNSET, Unset
 from typing import cast
 
@@ -36,6 +37,9 @@ class PlanOut:
             candidates (int | Unset):  Default: 0.
             classes (int | Unset):  Default: 0.
             note (None | str | Unset):
+            stopped_by (None | PlanOutStoppedByType0 | Unset): what ended the plan early: its work budget (deterministic) or
+                the wall-clock cap budget_ms; null: it finished
+            work (float | Unset): units of work the plan spent Default: 0.0.
      """
 
     elapsed_ms: float
@@ -47,6 +51,8 @@ class PlanOut:
     candidates: int | Unset = 0
     classes: int | Unset = 0
     note: None | str | Unset = UNSET
+    stopped_by: None | PlanOutStoppedByType0 | Unset = UNSET
+    work: float | Unset = 0.0
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -82,6 +88,16 @@ class PlanOut:
         else:
             note = self.note
 
+        stopped_by: None | str | Unset
+        if isinstance(self.stopped_by, Unset):
+            stopped_by = UNSET
+        elif isinstance(self.stopped_by, PlanOutStoppedByType0):
+            stopped_by = self.stopped_by.value
+        else:
+            stopped_by = self.stopped_by
+
+        work = self.work
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -99,6 +115,10 @@ class PlanOut:
             field_dict["classes"] = classes
         if note is not UNSET:
             field_dict["note"] = note
+        if stopped_by is not UNSET:
+            field_dict["stopped_by"] = stopped_by
+        if work is not UNSET:
+            field_dict["work"] = work
 
         return field_dict
 
@@ -145,6 +165,28 @@ class PlanOut:
         note = _parse_note(d.pop("note", UNSET))
 
 
+        def _parse_stopped_by(data: object) -> None | PlanOutStoppedByType0 | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, str):
+                    raise TypeError()
+                stopped_by_type_0 = PlanOutStoppedByType0(data)
+
+
+
+                return stopped_by_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(None | PlanOutStoppedByType0 | Unset, data)
+
+        stopped_by = _parse_stopped_by(d.pop("stopped_by", UNSET))
+
+
+        work = d.pop("work", UNSET)
+
         plan_out = cls(
             elapsed_ms=elapsed_ms,
             paths=paths,
@@ -155,6 +197,8 @@ class PlanOut:
             candidates=candidates,
             classes=classes,
             note=note,
+            stopped_by=stopped_by,
+            work=work,
         )
 
 

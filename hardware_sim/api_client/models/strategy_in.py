@@ -25,7 +25,11 @@ T = TypeVar("T", bound="StrategyIn")
 class StrategyIn:
     """ 
         Attributes:
-            budget_ms (float | Unset):  Default: 500.0.
+            budget_ms (float | Unset): a wall-clock cap on the plan, a safety net: when it bites the plan says stopped_by
+                'time' and may differ from run to run Default: 1500.0.
+            budget_work (float | Unset): the work a plan may do, in units of about a microsecond on the reference machine
+                (outcome cells, search nodes, recognition updates): the plan is the same on any machine under any load Default:
+                400000.0.
             depth (int | Unset):  Default: 2.
             forecast (int | Unset): how many of the ranked paths get p_forecast (the recognition's own forecast, one
                 observation update per class each); 0: none, faster plans Default: 1.
@@ -37,7 +41,8 @@ class StrategyIn:
                 default_rng([seed, v]); null: a seed drawn from the session id
      """
 
-    budget_ms: float | Unset = 500.0
+    budget_ms: float | Unset = 1500.0
+    budget_work: float | Unset = 400000.0
     depth: int | Unset = 2
     forecast: int | Unset = 1
     grid_size: int | Unset = 70
@@ -52,6 +57,8 @@ class StrategyIn:
 
     def to_dict(self) -> dict[str, Any]:
         budget_ms = self.budget_ms
+
+        budget_work = self.budget_work
 
         depth = self.depth
 
@@ -81,6 +88,8 @@ class StrategyIn:
         })
         if budget_ms is not UNSET:
             field_dict["budget_ms"] = budget_ms
+        if budget_work is not UNSET:
+            field_dict["budget_work"] = budget_work
         if depth is not UNSET:
             field_dict["depth"] = depth
         if forecast is not UNSET:
@@ -104,6 +113,8 @@ class StrategyIn:
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
         d = dict(src_dict)
         budget_ms = d.pop("budget_ms", UNSET)
+
+        budget_work = d.pop("budget_work", UNSET)
 
         depth = d.pop("depth", UNSET)
 
@@ -137,6 +148,7 @@ class StrategyIn:
 
         strategy_in = cls(
             budget_ms=budget_ms,
+            budget_work=budget_work,
             depth=depth,
             forecast=forecast,
             grid_size=grid_size,

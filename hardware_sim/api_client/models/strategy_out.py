@@ -25,6 +25,7 @@ class StrategyOut:
     """ 
         Attributes:
             budget_ms (float):
+            budget_work (float):
             depth (int):
             grid_size (int):
             max_paths (int):
@@ -35,6 +36,7 @@ class StrategyOut:
      """
 
     budget_ms: float
+    budget_work: float
     depth: int
     grid_size: int
     max_paths: int
@@ -50,6 +52,8 @@ class StrategyOut:
 
     def to_dict(self) -> dict[str, Any]:
         budget_ms = self.budget_ms
+
+        budget_work = self.budget_work
 
         depth = self.depth
 
@@ -74,6 +78,7 @@ class StrategyOut:
         field_dict.update(self.additional_properties)
         field_dict.update({
             "budget_ms": budget_ms,
+            "budget_work": budget_work,
             "depth": depth,
             "grid_size": grid_size,
             "max_paths": max_paths,
@@ -93,6 +98,8 @@ class StrategyOut:
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
         d = dict(src_dict)
         budget_ms = d.pop("budget_ms")
+
+        budget_work = d.pop("budget_work")
 
         depth = d.pop("depth")
 
@@ -118,6 +125,7 @@ class StrategyOut:
 
         strategy_out = cls(
             budget_ms=budget_ms,
+            budget_work=budget_work,
             depth=depth,
             grid_size=grid_size,
             max_paths=max_paths,

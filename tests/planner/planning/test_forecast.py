@@ -11,6 +11,7 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planner.codec import plan_to_dict
+from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import forecast_distinguishing, with_forecast
 from planner.planning.plan import plan_session
@@ -51,17 +52,23 @@ def test_a_path_sure_to_distinguish_is_forecast_so(name, bounds, seed, touches):
 def test_plan_session_forecasts_the_first_paths_within_the_budget():
     session = touched("thesis_like", BOUNDS[1], 3, 2)
     assert session.status == "ambiguous"
-    two = plan_session(session, SENSOR, StrategyConfig(budget_ms=None, forecast=2), 0)
+    two = plan_session(
+        session, SENSOR, StrategyConfig(budget_ms=None, budget_work=None, forecast=2), 0
+    )
     assert len(two.paths) > 2
     assert all(p.p_forecast is not None for p in two.paths[:2])
     assert all(p.p_forecast is None for p in two.paths[2:])
     assert plan_to_dict(two, 1)["paths"][0]["p_forecast"] == two.paths[0].p_forecast
-    none = plan_session(session, SENSOR, StrategyConfig(budget_ms=None, forecast=0), 0)
+    none = plan_session(
+        session, SENSOR, StrategyConfig(budget_ms=None, budget_work=None, forecast=0), 0
+    )
     assert all(p.p_forecast is None for p in none.paths)
     assert [p.path for p in none.paths] == [p.path for p in two.paths]
-    # no time left after the plan: nothing is forecast, nothing else changes
+    # no work left after the plan: nothing is forecast, nothing else changes
     late = dataclasses.replace(none, elapsed_ms=1e6)
-    assert with_forecast(late, session, 2, budget_ms=10.0).paths == late.paths
+    spent = Budget(work=1.0)
+    spent.spend("recognition_update")
+    assert with_forecast(late, session, 2, spent).paths == late.paths
 
 
 def test_forecast_of_nothing():

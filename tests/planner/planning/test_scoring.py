@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from planner.models.outlines import make_stable_pose
 from planner.planning.bitsets import SurvivorTable, undominated
-from planner.planning.budget import Deadline
+from planner.planning.budget import Budget
 from planner.planning.confusability import confusability, survivor_table
 from planner.planning.outcomes import predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
@@ -223,15 +223,16 @@ def test_inseparable_classes_end_the_search():
 
 
 @pytest.mark.parametrize("depth", [None, 2])
-def test_deadline_stops_the_search(depth):
+def test_the_budget_stops_the_search(depth):
     rng = np.random.default_rng(0)
     conf = rng.random((30, 12, 12)) < 0.4
     table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(12))
-    result = expected_remaining(table, depth, deadline=Deadline(end=0.0))
-    assert result.truncated
-    assert not result.exact[np.isfinite(result.value)].any()
-    with pytest.raises(TimeoutError):
-        state_value(table, None, deadline=Deadline(end=0.0))
+    for budget in (lambda: Budget(work=0.0), lambda: Budget(cap_ms=0.0)):
+        result = expected_remaining(table, depth, budget=budget())
+        assert result.truncated
+        assert not result.exact[np.isfinite(result.value)].any()
+        with pytest.raises(TimeoutError):
+            state_value(table, None, budget=budget())
 
 
 @pytest.mark.parametrize(

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import time
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -12,6 +14,7 @@ from hypothesis import strategies as st
 
 from planner.errors import PlannerError
 from planner.models.outlines import make_stable_pose
+from planner.planning import budget as budget_module
 from planner.planning.analysis import analyse
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.candidate_generation import CandidateConfig
@@ -40,7 +43,7 @@ TRIANGLE = ObjectModel("triangle", (make_stable_pose([[30, 0], [-15, 26], [-15, 
 MODELS = {m.name: m for m in (SQUARE, ELL, TRIANGLE)}
 WORKSPACE = Workspace((0.0, 0.0), 100.0)
 SENSOR = SensorBounds(0.5, 0.02)
-FAST = {"candidates": CandidateConfig(count=64), "budget_ms": None}
+FAST = {"candidates": CandidateConfig(count=64), "budget_ms": None, "budget_work": None}
 
 
 def hyp(name, x, y, theta=0.0, cls=0, p=1.0, eps_t=1.0):
@@ -62,7 +65,10 @@ PATH_B = SensingPath((100.0, 0.0), (-1.0, 0.0), 100.0)
 @pytest.mark.parametrize("name", ["pdm", "lookahead", "optimal"])
 def test_fig71_geometric(name):
     config = StrategyConfig(
-        name=name, candidates=CandidateConfig(count=0, feature_paths=0), budget_ms=None
+        name=name,
+        candidates=CandidateConfig(count=0, feature_paths=0),
+        budget_ms=None,
+        budget_work=None,
     )
     result = plan(
         FIG71, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config, extra_paths=[PATH_A, PATH_B]
@@ -93,7 +99,9 @@ def fig71_dilemma() -> SurvivorTable:
     ("name", "best"), [("pdm", 0), ("pruning", 1), ("lookahead", 1), ("optimal", 1)]
 )
 def test_lookahead_weighs_what_is_left(name, best):
-    ranking = rank_candidates(fig71_dilemma(), StrategyConfig(name=name, budget_ms=None))
+    ranking = rank_candidates(
+        fig71_dilemma(), StrategyConfig(name=name, budget_ms=None, budget_work=None)
+    )
     assert ranking.order[0] == best
     # E_a = 1 + 3/4 (1 + 2/3) = 2.25, E_b = 2
     np.testing.assert_allclose(ranking.expected_remaining[[0, 1]], [2.25, 2.0])
@@ -119,7 +127,7 @@ def tables(draw):
 @given(tables(), st.sampled_from(STRATEGIES), st.integers(0, 2**16))
 def test_never_uninformative_while_informative_exists(table_source, name, seed):
     table, source = table_source
-    config = StrategyConfig(name=name, budget_ms=None, optimal_max_classes=4)
+    config = StrategyConfig(name=name, budget_ms=None, budget_work=None, optimal_max_classes=4)
     ranking = rank_candidates(table, config, source=source, rng=seed)
     conf = table.matrix()
     informative = ~conf.all(axis=-1).all(axis=-1)  # some truth learns something
@@ -251,16 +259,44 @@ def test_optimal_says_when_it_plays_lookahead():
     assert exact.note is None and exact.paths[0].expected_remaining >= 1.0
 
 
-def test_budget_stops_with_the_best_so_far():
+@pytest.mark.parametrize(
+    ("limits", "stopped_by"),
+    [({"budget_ms": 1e-3, "budget_work": None}, "time"), ({"budget_work": 1.0}, "work")],
+)
+def test_budget_stops_with_the_best_so_far(limits, stopped_by):
     # neighbours within the tolerance of each other: no path settles everything at once,
     # so the search must look deeper and the (tiny) budget stops it
     hyps = [hyp("square", 1.5 * i, 0.8 * i, cls=i, p=1 / 8) for i in range(8)]
     config = StrategyConfig(
-        name="lookahead", depth=3, budget_ms=1e-3, candidates=CandidateConfig(count=64)
+        name="lookahead", depth=3, candidates=CandidateConfig(count=64), **limits
     )
     result = plan(hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
-    assert result.truncated and "time budget" in result.note
+    assert result.truncated and "budget" in result.note
+    assert result.stopped_by == stopped_by and result.work > 0
     assert result.paths and all(p.family != "uninformative" for p in result.paths)
+
+
+def test_a_work_budget_gives_the_same_plan_however_slow_the_machine():
+    """The same plan, also when the clock runs 50 times slower (a loaded machine)."""
+    hyps = [hyp("square", 1.5 * i, 0.8 * i, cls=i, p=1 / 8) for i in range(8)]
+    config = StrategyConfig(
+        name="lookahead",
+        depth=3,
+        candidates=CandidateConfig(count=64),
+        budget_work=1_000,
+        budget_ms=None,
+    )
+    first = plan(hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config, 3)
+    real = time.perf_counter
+    start = real()
+    with mock.patch.object(
+        budget_module.time, "perf_counter", lambda: start + 50 * (real() - start)
+    ):
+        slow = plan(hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config, 3)
+    assert first.stopped_by == slow.stopped_by == "work"
+    assert [p.path for p in first.paths] == [p.path for p in slow.paths]
+    assert [p.expected_remaining for p in first.paths] == [p.expected_remaining for p in slow.paths]
+    assert first.work == slow.work
 
 
 def test_motion_weight_prefers_near_origins():
@@ -324,11 +360,11 @@ def test_strategies_that_do_not_search_score_one_touch_deep_on_large_sets(name):
 def test_budget_covers_the_outcome_model():
     # 72 classes x 256 candidates come in blocks; the budget is spent after the first
     many = [hyp("square", 2 * (i % 12) - 11, 2 * (i // 12) - 5, cls=i, p=1 / 72) for i in range(72)]
-    config = StrategyConfig(name="pdm", budget_ms=1e-3, candidates=CandidateConfig(count=256))
+    config = StrategyConfig(name="pdm", budget_work=1.0, candidates=CandidateConfig(count=256))
     result = plan(many, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
-    unlimited = dataclasses.replace(config, budget_ms=None)
+    unlimited = dataclasses.replace(config, budget_ms=None, budget_work=None)
     full = plan(many, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), unlimited)
-    assert result.truncated and "time budget" in result.note
+    assert result.truncated and "budget" in result.note and result.stopped_by == "work"
     assert 0 < result.candidates < full.candidates and not full.truncated
     assert result.paths and all(p.family != "uninformative" for p in result.paths)
 
