@@ -120,9 +120,9 @@ def plan(
     contacts = [o.contact for o in observations if o.contact is not None]
 
     def finish(status: str, paths: Sequence[PlannedPath], **kw: Any) -> Plan:
-        elapsed = (time.perf_counter() - start) * 1000.0
+        elapsed, cut = (time.perf_counter() - start) * 1000.0, kw.pop("truncated", False)
         kw.update(work=budget.units, stopped_by=budget.stopped_by)
-        return Plan(status, kw.pop("truncated", False), elapsed, tuple(paths), config.name, **kw)
+        return Plan(status, cut, elapsed, tuple(paths), config.name, **kw)
 
     if not hypotheses:
         if contacts:
@@ -170,9 +170,8 @@ def plan(
             found, hypotheses, models_by_name(models), contacts, sensor, ranking, config, gen,
             session, budget,
         )  # fmt: skip
-    note = (
-        "; ".join(filter(None, [note, found.truncated and "candidates cut at the budget"])) or None
-    )
+    cut = "candidates cut at the budget" if found.truncated else None
+    note = "; ".join(filter(None, [note, cut])) or None
     return finish(
         "ambiguous",
         paths,
