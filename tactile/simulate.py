@@ -179,7 +179,18 @@ def cmd_simulate(args: argparse.Namespace) -> int:
 
         plot_histograms(rows, args.plot, title=f"{args.objects}, {preset.name}")
     if args.json:
-        print(json.dumps({"strategies": [r.as_dict() for r in rows]}))
+        trials = [
+            {
+                "strategy": r.strategy,
+                "trial": r.trial,
+                "touches": r.touches,
+                "status": r.status,
+                "success": r.success,
+                "stopped_by": [s for s in r.stopped_by if s],
+            }
+            for r in results
+        ]
+        print(json.dumps({"strategies": [r.as_dict() for r in rows], "trials": trials}))
         return 0
     b = preset.bounds
     print(

@@ -209,6 +209,31 @@ def _theta_interval(
     return lo, hi
 
 
+def _face_groups(
+    face_normals: np.ndarray, face_offsets: np.ndarray, use: np.ndarray
+) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Contacts of one hypothesis that lie on the same face (same posed line) give
+    parallel slabs, whose intersection is one slab: their group id `gid` (K, S) and,
+    per group (K, G), its face's normal and whether any contact of it is used. G is
+    at most the number of faces touched, however many contacts there are."""
+    K, S = use.shape
+    keys = (face_offsets, face_normals[..., 1], face_normals[..., 0])
+    order = np.lexsort(keys, axis=-1)
+    key = np.stack(keys, axis=-1)
+    ranked = np.take_along_axis(key, order[..., None], axis=1)
+    first = np.ones((K, S), dtype=bool)
+    first[:, 1:] = np.any(ranked[:, 1:] != ranked[:, :-1], axis=-1)
+    gid = np.empty((K, S), dtype=np.int64)
+    np.put_along_axis(gid, order, np.cumsum(first, axis=1) - 1, axis=1)
+    G = int(gid.max(initial=-1)) + 1
+    rows = np.broadcast_to(np.arange(K)[:, None], (K, S))
+    g_normals = np.zeros((K, G, 2))
+    g_normals[rows, gid] = face_normals
+    g_use = np.zeros((K, G), dtype=bool)
+    np.logical_or.at(g_use, (rows, gid), use)
+    return gid, g_normals, g_use
+
+
 def _polygons(
     points: np.ndarray,
     face_normals: np.ndarray,
@@ -222,28 +247,53 @@ def _polygons(
     convex polygon where every used contact lies within `width` (scalar or (K,))
     of its face's posed line, as its candidate vertices (slab-edge crossings)
     `vx`, `vy` (K, N, V), `ok` (K, N, V) for those inside every slab, and
-    `bounded` (K,): two non-parallel faces are used."""
-    s = use.shape[1]
-    pairs = np.array(np.triu_indices(s, 1)).T
+    `bounded` (K,): two non-parallel faces are used.
+
+    The contacts on one face make one slab (the intersection of theirs), so the
+    work grows with the faces touched, not with the number of contacts."""
+    K, N = d_theta.shape
+    gid, g_normals, g_use = _face_groups(face_normals, face_offsets, use)
+    G = g_use.shape[1]
+    pairs = np.array(np.triu_indices(G, 1)).T
     sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
     R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
-    n = np.einsum("knij,ksj->knsi", R, face_normals)
-    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    # each contact's posed line at each rotation: n . t = c within the width
+    n_s = np.einsum("knij,ksj->knsi", R, face_normals)
+    c_s = np.einsum("knsi,ksi->kns", n_s, points) - face_offsets[:, None, :]
+    # per face: n . t in [max c - w, min c + w], a slab of centre and half-width
+    idx = (
+        np.broadcast_to(np.arange(K)[:, None, None], c_s.shape),
+        np.broadcast_to(np.arange(N)[None, :, None], c_s.shape),
+        np.broadcast_to(gid[:, None, :], c_s.shape),
+    )
+    c_max = np.full((K, N, G), -np.inf)
+    c_min = np.full((K, N, G), np.inf)
+    used = np.broadcast_to(use[:, None, :], c_s.shape)
+    np.maximum.at(c_max, idx, np.where(used, c_s, -np.inf))
+    np.minimum.at(c_min, idx, np.where(used, c_s, np.inf))
+    w0 = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None]
+    held = g_use[:, None, :]  # a group of unused contacts has no slab
+    c_max, c_min = np.where(held, c_max, 0.0), np.where(held, c_min, 0.0)
+    spread, centre = c_max - c_min, (c_max + c_min) / 2  # (K, N, G)
+    w = w0 - spread / 2  # (K, N, G): < 0 where the face's contacts cannot all be met
+    n = np.einsum("knij,kgj->kngi", R, g_normals)  # (K, N, G, 2)
+    tol = LENGTH_SLACK * (1.0 + np.abs(centre)) + 1e-12
+    met = np.all((w >= -tol) | ~g_use[:, None, :], axis=-1)  # (K, N)
+    w = np.maximum(w, 0.0)
     i, j = pairs[:, 0], pairs[:, 1]
     a, b = n[:, :, i], n[:, :, j]
     det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    good = (np.abs(det) > SHARE_SLACK) & use[:, None, i] & use[:, None, j]
+    good = (np.abs(det) > SHARE_SLACK) & g_use[:, None, i] & g_use[:, None, j]
     det = np.where(good, det, 1.0)
-    w = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None, None]
-    ci = centre[:, :, i, None] + w * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + w * sides[:, 1]
+    ci = centre[:, :, i, None] + w[:, :, i, None] * sides[:, 0]  # (K, N, Q, 4)
+    cj = centre[:, :, j, None] + w[:, :, j, None] * sides[:, 1]
     shape = (*det.shape[:2], -1)
     vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
     vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
     proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
-    tol = LENGTH_SLACK * (1.0 + np.abs(centre)) + 1e-12
-    inside = np.abs(proj - centre[:, :, None, :]) <= w + tol[:, :, None, :]
-    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
+    inside = np.abs(proj - centre[:, :, None, :]) <= w[:, :, None, :] + tol[:, :, None, :]
+    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~g_use[:, None, None, :], axis=-1)
+    ok &= met[..., None]
     return vx, vy, ok, good.any(axis=(1, 2))
 
 

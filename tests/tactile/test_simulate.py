@@ -38,7 +38,8 @@ def test_simulate_json_shape_and_plot(object_file, tmp_path, capsys):
     argv += ["--max-touches", "6", "--workers", "1", "--plot", str(png), "--json"]
     assert main(argv) == 0
     out = json.loads(capsys.readouterr().out)
-    assert list(out) == ["strategies"]
+    assert list(out) == ["strategies", "trials"]
+    assert {t["strategy"] for t in out["trials"]} == {"pdm", "thesis"}
     assert [s["strategy"] for s in out["strategies"]] == ["pdm", "thesis"]
     for row in out["strategies"]:
         assert set(row) == JSON_KEYS

@@ -1,0 +1,75 @@
+"""The consistent translations: one slab per touched face equals one slab per contact."""
+
+from __future__ import annotations
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+from scipy.spatial import ConvexHull, QhullError
+
+from planner.geometry import rotation_matrices
+from planner.recognition.consistent import _polygons
+
+
+def _slow_polygons(points, face_normals, face_offsets, use, theta, d_theta, width):
+    """The reference: every pair of contacts' slab edges crossed, checked against every
+    contact (cubic in the contacts)."""
+    s = use.shape[1]
+    pairs = np.array(np.triu_indices(s, 1)).T
+    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
+    R = rotation_matrices(theta[:, None] + d_theta)
+    n = np.einsum("knij,ksj->knsi", R, face_normals)
+    centre = np.einsum("knsi,ksi->kns", n, points) - face_offsets[:, None, :]
+    i, j = pairs[:, 0], pairs[:, 1]
+    a, b = n[:, :, i], n[:, :, j]
+    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
+    good = (np.abs(det) > 1e-9) & use[:, None, i] & use[:, None, j]
+    det = np.where(good, det, 1.0)
+    w = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None, None]
+    ci = centre[:, :, i, None] + w * sides[:, 0]
+    cj = centre[:, :, j, None] + w * sides[:, 1]
+    shape = (*det.shape[:2], -1)
+    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
+    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
+    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
+    inside = np.abs(proj - centre[:, :, None, :]) <= w + 1e-9 * (1 + np.abs(centre[:, :, None]))
+    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~use[:, None, None, :], axis=-1)
+    return vx, vy, ok
+
+
+def _area(x, y) -> float:
+    pts = np.unique(np.round(np.stack([x, y], axis=-1), 9), axis=0)
+    if len(pts) < 3:
+        return 0.0
+    try:
+        return float(ConvexHull(pts).volume)
+    except QhullError:  # collinear
+        return 0.0
+
+
+@settings(max_examples=150, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), contacts=st.integers(2, 12), faces=st.integers(2, 5))
+def test_one_slab_per_face_gives_the_polygon_of_one_slab_per_contact(seed, contacts, faces):
+    rng = np.random.default_rng(seed)
+    K, N = 3, 4
+    angles = rng.uniform(-np.pi, np.pi, (K, faces))
+    normals = np.stack([np.cos(angles), np.sin(angles)], axis=-1)  # (K, F, 2)
+    offsets = rng.uniform(2, 8, (K, faces))
+    face = rng.integers(0, faces, (K, contacts))  # several contacts on one face
+    rows = np.arange(K)[:, None]
+    fn, fo = normals[rows, face], offsets[rows, face]
+    # contacts near their face's line (in the model frame), spread along it
+    along = np.stack([-fn[..., 1], fn[..., 0]], axis=-1) * rng.uniform(-5, 5, (K, contacts, 1))
+    points = fn * (fo + rng.uniform(-0.3, 0.3, (K, contacts)))[..., None] + along
+    use = rng.random((K, contacts)) < 0.85
+    theta = rng.uniform(-0.05, 0.05, K)
+    d_theta = rng.uniform(-0.02, 0.02, (K, N))
+    width = rng.uniform(0.2, 0.6, K)
+    vx, vy, ok, _ = _polygons(points, fn, fo, use, theta, d_theta, width)
+    rx, ry, rok = _slow_polygons(points, fn, fo, use, theta, d_theta, width)
+    for k in range(K):
+        for m in range(N):
+            assert ok[k, m].any() == rok[k, m].any(), (k, m)
+            fast = _area(vx[k, m][ok[k, m]], vy[k, m][ok[k, m]])
+            slow = _area(rx[k, m][rok[k, m]], ry[k, m][rok[k, m]])
+            assert abs(fast - slow) <= 1e-6 * max(1.0, slow), (k, m, fast, slow)
