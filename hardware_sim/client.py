@@ -33,6 +33,7 @@ from typing import Protocol
 import numpy as np
 
 from hardware_sim.protocol import Probe
+from planner.codec import observation_from_dict, observation_to_dict
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
 from planner.recognition.config import RecognitionConfig
@@ -174,7 +175,10 @@ class InProcessService:
         )
 
     def observe(self, observation: Observation) -> Update:
-        self.session = self.session.observe(observation)
+        # what a service would store: the same normalization (directions, normals to unit
+        # length), so the in-process loop and the HTTP loop see identical observations
+        stored = observation_from_dict(observation_to_dict(observation))
+        self.session = self.session.observe(stored)
         hyps = self.session.hypotheses
         return Update(self.session.status, len(hyps), len({h.equivalence_class for h in hyps}))
 

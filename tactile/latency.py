@@ -47,7 +47,8 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--seed", type=int, default=0)
     parser.add_argument("--workers", type=int, default=1)
     parser.add_argument("--strategy", default="lookahead")
-    parser.add_argument("--budget-ms", type=float, default=500.0)
+    parser.add_argument("--budget-ms", type=float, default=None, help="default: the service's")
+    parser.add_argument("--budget-work", type=float, default=None, help="default: the service's")
     args = parser.parse_args(argv)
 
     models = load_objects(args.objects)
@@ -73,7 +74,11 @@ def main(argv: list[str] | None = None) -> None:
                         "normal_error": bounds.normal_error,
                     },
                     "workspace": {"center": [0, 0], "radius": workspace.radius},
-                    "strategy": {"name": args.strategy, "budget_ms": args.budget_ms},
+                    "strategy": {
+                        "name": args.strategy,
+                        **({} if args.budget_ms is None else {"budget_ms": args.budget_ms}),
+                        **({} if args.budget_work is None else {"budget_work": args.budget_work}),
+                    },
                 }
                 sid = http.post("/v1/sessions", json=body).json()["id"]
                 contacts = 0
@@ -107,6 +112,7 @@ def main(argv: list[str] | None = None) -> None:
         "workers": args.workers,
         "strategy": args.strategy,
         "budget_ms": args.budget_ms,
+        "budget_work": args.budget_work,
         "post_observation": _percentiles(post_ms),
         "get_plan_all": _percentiles(plan_ms),
         "get_plan_after_a_contact": _percentiles(plan_contact_ms),

@@ -122,6 +122,13 @@ def _informative(ctx: _Context, rows: np.ndarray | None = None) -> np.ndarray:
     return rows[ctx.info.family[rows] != UNINFORMATIVE]
 
 
+def _order(keys: tuple[np.ndarray, ...]) -> np.ndarray:
+    """``np.lexsort`` on the keys rounded to 1e-9: values equal but for floating-point
+    noise (the same session derived along another path sums in another order) tie,
+    and the next key, then the candidate order, decides, as it would for exact ties."""
+    return np.lexsort(tuple(np.round(k, 9) if k.dtype.kind == "f" else k for k in keys))
+
+
 def _unscored(ctx: _Context, order: np.ndarray, note: str | None = None) -> Ranking:
     n = ctx.table.n_paths
     return Ranking(order, np.full(n, np.inf), np.zeros(n, dtype=bool), False, note)
@@ -132,14 +139,14 @@ def _pdm(ctx: _Context) -> Ranking:
     # cost = (1 - P(DM)) + motion_weight * motion_cost
     cost = combined_objective(1.0 - info.p_distinguishing, ctx.motion, ctx.config.motion_weight)
     keys = (ctx.motion[ok], -info.expected_pruning[ok], -info.p_informative[ok], cost[ok])
-    return _unscored(ctx, ok[np.lexsort(keys)])
+    return _unscored(ctx, ok[_order(keys)])
 
 
 def _pruning(ctx: _Context) -> Ranking:
     ok, info = _informative(ctx), ctx.info
     # cost = -expected pruning + motion_weight * motion_cost
     cost = combined_objective(-info.expected_pruning, ctx.motion, ctx.config.motion_weight)
-    return _unscored(ctx, ok[np.lexsort((ctx.motion[ok], -info.p_distinguishing[ok], cost[ok]))])
+    return _unscored(ctx, ok[_order((ctx.motion[ok], -info.p_distinguishing[ok], cost[ok]))])
 
 
 def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None) -> Ranking:
@@ -157,7 +164,7 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
     keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok], ~result.exact[ok])
     if result.truncated:
         note = "; ".join(filter(None, [note, "search stopped at the budget"]))
-    return Ranking(ok[np.lexsort(keys)], result.value, result.exact, result.truncated, note)
+    return Ranking(ok[_order(keys)], result.value, result.exact, result.truncated, note)
 
 
 def _depth_lookahead(ctx: _Context) -> Ranking:
