@@ -431,11 +431,12 @@ def _picture_bytes(
     fmt: str, mii: VectorMII | None, grid: GridMII | None, dpi: int = 100, **figure: Any
 ) -> bytes:
     """The figure drawn (one at a time: matplotlib is not thread-safe) and saved as
-    `fmt`; SVG with a fixed hash salt and no date, so equal pictures are equal bytes."""
+    `fmt`; SVG with a fixed hash salt and no date, so equal pictures are equal bytes.
+    Text is drawn as given (no mathtext): an object named ``$x^2$`` is its name."""
     from matplotlib import rc_context
 
     buf = io.BytesIO()
-    with _DRAWING:
+    with _DRAWING, rc_context({"text.parse_math": False}):
         fig = _figure(mii, grid, **figure)
         if fmt == "svg":
             with rc_context({"svg.hashsalt": "tactile-planner", "svg.fonttype": "none"}):

@@ -2,6 +2,7 @@
 
 from collections.abc import Awaitable
 from typing import Annotated, Literal
+from urllib.parse import quote
 
 from fastapi import APIRouter, Path, Query, Request, Response
 
@@ -24,7 +25,8 @@ async def _registered(response: Response, registration: Awaitable[tuple[bool, st
             f"an object named {exc.args[0]!r} with other geometry is registered", field="name"
         ) from exc
     response.status_code = 201 if created else 200
-    response.headers["Location"] = f"/v1/objects/{name}"
+    # percent-encoded: a header is Latin-1, and `?` or `#` in a name would end the path
+    response.headers["Location"] = f"/v1/objects/{quote(name, safe='')}"
     return ObjectCreated(name=name)
 
 

@@ -204,3 +204,31 @@ def test_bad_headers_are_4xx(hostile):
     assert 400 <= r.status_code < 500 and is_problem(r)
     _healthy(client, sid)
     assert len(client.get(f"/v1/sessions/{sid}").json()["observations"]) == 0
+
+
+@pytest.mark.parametrize(
+    "name",
+    [
+        "plaque ø 40 — 日本",
+        "a?b#c",
+        "$x^2$ \\frac{1}{0}",
+        "cut $\\nosuch{$ 2",
+        "<b>bold<b> & 'q'",
+        "100%",
+        "_{}^$",
+    ],
+)
+def test_any_name_is_registered_located_and_drawn(hostile, name):
+    client, _ = hostile
+    outline = [[-2, -1], [2, -1], [2, 1], [-2, 1]]
+    r = client.post("/v1/objects", json={"name": name, "outline": outline})
+    assert r.status_code in (200, 201), r.text
+    location = r.headers["location"]
+    assert location.isascii() and "?" not in location and "#" not in location
+    got = client.get(location)
+    assert got.status_code == 200 and got.json()["name"] == name
+    sid = create_session(client, objects=[name])["id"]
+    assert client.post(f"/v1/sessions/{sid}/observations", json=BOTTOM).status_code == 201
+    for kind in ("png", "svg"):
+        picture = client.get(f"/v1/sessions/{sid}/image.{kind}")
+        assert picture.status_code == 200, (kind, picture.text[:200])
