@@ -225,6 +225,11 @@ class Store:
             raise ObjectConflictError(name)
         return False
 
+    def delete_object(self, name: str) -> bool:
+        """Unregister an object; False when there was none of that name."""
+        with self._write() as conn:
+            return conn.execute(delete(objects).where(objects.c.name == name)).rowcount == 1
+
     def get_objects(self, names: Sequence[str]) -> dict[str, dict[str, Any]]:
         """The registered objects among `names` (missing names are left out)."""
         if not names:

@@ -69,6 +69,14 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
             raise NotFoundError(f"no object named {name!r}", field="name")
         return ObjectOut(**found[name])
 
+    @router.delete("/{name}", status_code=204, response_class=Response)
+    async def delete_object(name: ObjectName, service: ServiceDep):
+        """Unregister an object. Sessions that use it keep their own copy (they store
+        the geometry they were created with) and go on unchanged."""
+        if not await service.run_db(service.store.delete_object, name):
+            raise NotFoundError(f"no object named {name!r}", field="name")
+        return Response(status_code=204)
+
     @router.post(
         ":import-mesh",
         status_code=201,

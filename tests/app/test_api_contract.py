@@ -47,6 +47,7 @@ def test_openapi_lists_every_endpoint_with_stable_operation_ids(client):
         ("/v1/objects", "post"): "create_object",
         ("/v1/objects", "get"): "list_objects",
         ("/v1/objects/{name}", "get"): "get_object",
+        ("/v1/objects/{name}", "delete"): "delete_object",
         ("/v1/sessions", "post"): "create_session",
         ("/v1/sessions/{session_id}", "get"): "get_session",
         ("/v1/sessions/{session_id}", "delete"): "delete_session",

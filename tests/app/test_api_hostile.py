@@ -232,3 +232,7 @@ def test_any_name_is_registered_located_and_drawn(hostile, name):
     for kind in ("png", "svg"):
         picture = client.get(f"/v1/sessions/{sid}/image.{kind}")
         assert picture.status_code == 200, (kind, picture.text[:200])
+    # unregistered: gone from the registry, the session keeps its copy
+    assert client.delete(location).status_code == 204
+    assert is_problem(client.get(location), 404) and is_problem(client.delete(location), 404)
+    assert client.get(f"/v1/sessions/{sid}").json()["objects"] == [name]

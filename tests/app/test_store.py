@@ -163,6 +163,8 @@ def test_objects_register_once(stores):
         b.put_object("sq", {"name": "sq", "outline": [[0, 0], [2, 0], [0, 2]]})
     assert b.get_objects(["sq", "nope"]).keys() == {"sq"}
     assert [o["name"] for o in a.list_objects(10)] == ["sq"]
+    assert b.delete_object("sq") and not a.delete_object("sq")
+    assert a.get_objects(["sq"]) == {}
 
 
 def test_snapshots_keep_the_newest_two_and_follow_undo(stores):
