@@ -71,13 +71,6 @@ def _metrics_dir(workers: int) -> None:
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
 
 
-def database_label(target: str) -> str:
-    """The database for a log line: a URL without its password."""
-    from app.store_types import database_url
-
-    return database_url(target).render_as_string(hide_password=True)
-
-
 def cmd_serve(args: argparse.Namespace) -> int:
     import structlog
     import uvicorn
@@ -85,10 +78,9 @@ def cmd_serve(args: argparse.Namespace) -> int:
 
     from app.observability import configure_logging
     from app.settings import Settings
+    from app.store_types import database_label, database_url, is_url
 
     if args.db is not None:
-        from app.store_types import database_url, is_url
-
         database_url(args.db)  # refuse what no backend takes before anything starts
         db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())
         os.environ["TACTILE_DB"] = db

@@ -91,22 +91,21 @@ def _next_state(
     current: Session,
     step: Callable[[SessionRecord, Session], Session],
     limit: int | None,
-) -> tuple[Session, bytes, Snapshot]:
-    """The session after `step`, derived, its JSON at the next version and its snapshot
-    (in a thread)."""
+    keep: bool,
+) -> tuple[Session, bytes, Snapshot | None]:
+    """The session after `step`, derived, its JSON at the next version and, when it
+    is to be kept (`keep`), its snapshot (in a thread)."""
     new = derive(step(record, current))
     body = session_json(record.id, record.version + 1, record.config, new, limit)
-    return new, body, Snapshot(code_version(), snapshot(new))
+    return new, body, Snapshot(code_version(), snapshot(new)) if keep else None
 
 
 def _resume(base: Session | None, stored: bytes | None, record: SessionRecord) -> Session:
-    """The record's derived session from the better of an in-memory base and a stored
-    snapshot (one whose observations begin the record's), extended by the rest."""
+    """The record's derived session from a stored snapshot newer than the in-memory
+    base (when it was written by this code and its observations begin the
+    record's), else from the base, extended by the rest."""
     restored = restore(stored) if stored is not None else None
-    newer = restored is not None and (
-        base is None or len(restored.observations) > len(base.observations)
-    )
-    if newer and extends(restored, record):
+    if restored is not None and extends(restored, record):
         base = restored
     return derive(catch_up(base, record))
 
@@ -276,9 +275,12 @@ class SessionService:
         fp: str,
         if_match: str | None,
         step: Callable[[SessionRecord, Session], Session],
-        write: Callable[[SessionRecord, IdempotentWrite | None, Snapshot], StoredResponse | None],
+        write: Callable[
+            [SessionRecord, IdempotentWrite | None, Snapshot | None], StoredResponse | None
+        ],
         status: int,
         limit: int | None,
+        keep: bool = True,
     ) -> Answer:
         """Compute the next state from the current one and store it (CAS on version)."""
         with self._claim(scope, idem_key):
@@ -296,7 +298,9 @@ class SessionService:
                         )
                     current = await self._session(record)
                     version = record.version + 1
-                    new, body, snap = await self.run_cpu(_next_state, record, current, step, limit)
+                    new, body, snap = await self.run_cpu(
+                        _next_state, record, current, step, limit, keep
+                    )
                     answer = Answer(status, body, {"ETag": etag(version)})
                     idem = self._idem(scope, idem_key, fp, answer)
                     try:
@@ -339,7 +343,7 @@ class SessionService:
             return session.observe(observation)
 
         def write(
-            record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot
+            record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot | None
         ) -> StoredResponse | None:
             return self.store.append_observation(session_id, record.version, stored, idem, snap)
 
@@ -362,14 +366,14 @@ class SessionService:
             return session.undo()
 
         def write(
-            record: SessionRecord, idem: IdempotentWrite | None, _snap: Snapshot
+            record: SessionRecord, idem: IdempotentWrite | None, _snap: Snapshot | None
         ) -> StoredResponse | None:
-            # the undone state's snapshot is kept (the one before the last): not written
             return self.store.drop_last_observation(session_id, record.version, idem)
 
+        # the state undone to is the snapshot before the last one, already stored
         return await self._mutate(
             session_id, f"sessions/{session_id}/undo", idem_key, fp, if_match, step, write,
-            200, limit,
+            200, limit, keep=False,
         )  # fmt: skip
 
     async def delete_session(self, session_id: str, if_match: str | None) -> None:

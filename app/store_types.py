@@ -18,6 +18,7 @@ __all__ = [
     "StoreUnavailableError",
     "StoredResponse",
     "VersionConflictError",
+    "database_label",
     "database_url",
     "is_url",
 ]
@@ -86,6 +87,16 @@ class SessionRecord:
 def is_url(value: str | Path) -> bool:
     """True when `value` is written as a URL (``scheme://...``), never a file name."""
     return bool(_URL_SCHEME.match(str(value).strip()))
+
+
+def database_label(target: str | Path) -> str:
+    """The database of a ``--db`` value for a log line: a URL without its password
+    (what :meth:`app.store.Store.describe` says of an open store).
+
+    >>> database_label("postgresql://u:secret@db/tactile")
+    'postgresql+psycopg://u:***@db/tactile'
+    """
+    return database_url(target).render_as_string(hide_password=True)
 
 
 def database_url(target: str | Path) -> URL:

@@ -69,9 +69,10 @@ class Budget:
         if self.stopped_by == "work" and self.units <= self.work:
             self.stopped_by = None
 
-    def left(self) -> float:
-        """Units still to spend (inf when unlimited)."""
-        return self.work - self.units
+    def spend_updates(self, count: int, hypotheses: int) -> None:
+        """`count` recognition updates of a session carrying `hypotheses` hypotheses."""
+        self.spend("recognition_update", count)
+        self.spend("recognition_hypothesis", count * hypotheses)
 
     def exhausted(self) -> bool:
         """True once the work is spent or the cap passed (and from then on)."""

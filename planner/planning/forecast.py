@@ -80,8 +80,7 @@ def forecast_distinguishing(
         if out.hit[0, row]:
             contact = Contact(tuple(out.point[0, row]), tuple(out.normal[0, row]))
         after = session.observe(Observation(path, contact)).hypotheses
-        budget.spend("recognition_update")
-        budget.spend("recognition_hypothesis", len(hypotheses))
+        budget.spend_updates(1, len(hypotheses))
         if len({h.equivalence_class for h in after}) == 1:
             total += float(weight[k])
     return min(total / float(weight.sum()), 1.0)
@@ -166,8 +165,7 @@ def recognition_ranking(
         if rows and budget.exhausted():
             break
         left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
-        budget.spend("recognition_update", len(best))
-        budget.spend("recognition_hypothesis", len(best) * len(posed.weight))
+        budget.spend_updates(len(best), len(posed.weight))
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))

@@ -149,7 +149,6 @@ def test_a_work_budget_gives_the_same_touches_on_a_loaded_machine():
         load.join()
     assert _comparable(loaded) == _comparable(quiet)
     assert any("work" in r.stopped_by for r in quiet)  # the budget did bind
-    assert sum(map(sum, (r.plan_ms for r in loaded))) > 0
 
 
 def test_every_strategy_sees_the_same_worlds(sequential_results):
