@@ -25,7 +25,10 @@ BACKENDS = ["sqlite", "postgresql"]
 @pytest.fixture(scope="session")
 def postgres_admin() -> str:
     """The admin URL of a running PostgreSQL server (or a skip / failure saying why)."""
-    url = os.environ.get("TACTILE_TEST_POSTGRES", DEFAULT_ADMIN)
+    url = os.environ.get("TACTILE_TEST_POSTGRES", DEFAULT_ADMIN).strip()
+    if not url.startswith(("postgresql://", "postgresql+psycopg://")):
+        # a path would open a SQLite file and the cases would test nothing they claim
+        pytest.fail(f"TACTILE_TEST_POSTGRES is not a PostgreSQL URL: {url!r}")
     try:
         engine = create_engine(database_url(url), connect_args={"connect_timeout": 3})
         with engine.connect() as conn:
