@@ -130,6 +130,7 @@ def strategy_config(cfg: Mapping[str, Any]) -> StrategyConfig:
         motion_weight=s["motion_weight"],
         grid_size=s["grid_size"],
         forecast=int(s.get("forecast", 1)),  # sessions stored before it existed: 1
+        simulations=int(s.get("simulations", StrategyConfig.simulations)),
     )
 
 

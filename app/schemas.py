@@ -374,6 +374,11 @@ def _strategy_in(settings: Settings) -> type[BaseModel]:
             description="how many of the ranked paths get p_forecast (the recognition's "
             "own forecast, one observation update per class each); 0: none, faster plans",
         )
+        simulations: Annotated[int, Field(ge=1, le=settings.max_simulations)] = Field(
+            min(1000, settings.max_simulations),
+            description="the pomcp strategy's Monte-Carlo simulations per plan (the work "
+            "budget may stop it sooner); other strategies ignore it",
+        )
         seed: Annotated[int, Field(ge=0, le=2**63 - 1)] | None = Field(
             None,
             description=(

@@ -56,6 +56,7 @@ class Settings(BaseSettings):
     )
     max_lookahead_depth: int = Field(4, ge=1, le=64)
     max_plan_paths: int = Field(50, ge=1, le=10_000)
+    max_simulations: int = Field(20_000, ge=1, le=10_000_000)
     max_coordinate: float = Field(1e6, gt=0, le=1e12, description="|x|, |y| and lengths")
     max_image_dpi: int = Field(300, ge=10, le=1200)
     max_list_objects: int = Field(1000, ge=1, le=1_000_000)

@@ -36,6 +36,7 @@ UNIT_US: dict[str, float] = {
     "leaf_set": 200.0,
     "recognition_update": 8000.0,
     "recognition_hypothesis": 100.0,
+    "simulated_touch": 5.0,
 }
 
 

@@ -13,7 +13,18 @@ from planner.planning.outcomes import OutcomeConfig
 
 __all__ = ["DEFAULT_WORK", "STRATEGIES", "THESIS_CHOICES", "StrategyConfig"]
 
-STRATEGIES = ("random", "thesis", "pdm", "pruning", "lookahead", "optimal")
+STRATEGIES = (
+    "random",
+    "thesis",
+    "pdm",
+    "pruning",
+    "lookahead",
+    "optimal",
+    # the published peers, on the same candidates and outcome model (planner.planning.peers)
+    "ec2",
+    "infogain",
+    "pomcp",
+)
 THESIS_CHOICES = ("choose", "random")
 #: The default work budget: about 400 ms of planning on the reference machine (its
 #: wall-clock cap, `budget_ms`, defaults to well above that: a safety net only).
@@ -37,7 +48,9 @@ class StrategyConfig:
     strength: ``choose``, the nearest origin, as the thesis' hardware did (ch. 5),
     or ``random``, as its simulations did (§4.3.6)), and the candidate and outcome
     settings. `forecast` is how many of the ranked paths a session-aware caller
-    has the recognition forecast (:mod:`planner.planning.forecast`; 0: none)."""
+    has the recognition forecast (:mod:`planner.planning.forecast`; 0: none).
+    `simulations` is the ``pomcp`` strategy's budget (Monte-Carlo simulations per
+    plan; the work budget may stop it sooner)."""
 
     name: str = "lookahead"
     depth: int = 2
@@ -50,6 +63,7 @@ class StrategyConfig:
     grid_size: int = 70
     thesis_choice: str = "choose"
     forecast: int = 1
+    simulations: int = 1000
     candidates: CandidateConfig = field(default_factory=CandidateConfig)
     outcome: OutcomeConfig = field(default_factory=OutcomeConfig)
 
@@ -58,7 +72,7 @@ class StrategyConfig:
             raise PlannerError(
                 f"unknown strategy; one of {list(STRATEGIES)}", field="strategy.name"
             )
-        for name in ("depth", "max_paths", "random_draws", "grid_size"):
+        for name in ("depth", "max_paths", "random_draws", "grid_size", "simulations"):
             if getattr(self, name) < 1:
                 raise PlannerError("must be >= 1", field=f"strategy.{name}")
         if self.thesis_choice not in THESIS_CHOICES:

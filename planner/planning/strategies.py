@@ -4,8 +4,11 @@ Strategies: ``random`` (thesis Exp. I), ``thesis`` (opening probes, then the
 grid windows of :mod:`planner.image.windows` in CHOOSE order), ``pdm`` (max P(DM)),
 ``pruning`` (max expected pruning), ``lookahead`` (min expected remaining
 touches, `depth` deep), ``optimal`` (exact DP over survivor sets for at most
-`optimal_max_classes` classes, else lookahead, saying so). None of them
-returns an uninformative path while an informative candidate exists.
+`optimal_max_classes` classes, else lookahead, saying so), and the published peers on
+the same table: ``ec2`` (max expected edge weight cut), ``infogain`` (max expected
+entropy reduction of the classes) and ``pomcp`` (Monte-Carlo tree search,
+`simulations` per plan). None of them returns an uninformative path while an
+informative candidate exists.
 """
 
 from __future__ import annotations
@@ -19,6 +22,8 @@ from planner.planning.analysis import as_generator
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
+from planner.planning.peers import edge_cut, information_gain
+from planner.planning.pomcp import search as pomcp_search
 from planner.planning.scoring import (
     UNINFORMATIVE,
     InformationScores,
@@ -179,6 +184,34 @@ def _optimal(ctx: _Context) -> Ranking:
     return _lookahead(ctx, ctx.config.depth, note)
 
 
+def _greedy(ctx: _Context, score: np.ndarray) -> Ranking:
+    """Informative paths by `score` (largest first), less motion-weighted; ties to the
+    larger P(DM), then the shorter motion."""
+    ok = _informative(ctx)
+    cost = combined_objective(-score, ctx.motion, ctx.config.motion_weight)
+    return _unscored(ctx, ok[_order((ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok]))])
+
+
+def _ec2(ctx: _Context) -> Ranking:
+    return _greedy(ctx, edge_cut(ctx.table))
+
+
+def _infogain(ctx: _Context) -> Ranking:
+    return _greedy(ctx, information_gain(ctx.table))
+
+
+def _pomcp(ctx: _Context) -> Ranking:
+    result = pomcp_search(ctx.table, ctx.rng, simulations=ctx.config.simulations, budget=ctx.budget)
+    ok = _informative(ctx)
+    # the tree's choice first, then the paths it tried by visits and value, then the rest
+    first = (ok != result.best).astype(int)
+    cost = combined_objective(result.value[ok], ctx.motion[ok], ctx.config.motion_weight)
+    keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost, -result.visits[ok], first)
+    note = "simulations stopped at the budget" if result.truncated else None
+    ranking = _unscored(ctx, ok[_order(keys)], note)
+    return Ranking(ranking.order, ranking.expected_remaining, ranking.exact, result.truncated, note)
+
+
 def _random(ctx: _Context) -> Ranking:
     drawn = _informative(ctx, np.flatnonzero(ctx.source == "random"))
     if len(drawn):
@@ -219,4 +252,7 @@ _STRATEGIES: dict[str, Callable[[_Context], Ranking]] = {
     "pruning": _pruning,
     "lookahead": _depth_lookahead,
     "optimal": _optimal,
+    "ec2": _ec2,
+    "infogain": _infogain,
+    "pomcp": _pomcp,
 }

@@ -39,6 +39,8 @@ class StrategyIn:
             name (StrategyInName | Unset):  Default: StrategyInName.LOOKAHEAD.
             seed (int | None | Unset): seeds the planner's random choices: the plan at session version v draws from numpy's
                 default_rng([seed, v]); null: a seed drawn from the session id
+            simulations (int | Unset): the pomcp strategy's Monte-Carlo simulations per plan (the work budget may stop it
+                sooner); other strategies ignore it Default: 1000.
      """
 
     budget_ms: float | Unset = 1500.0
@@ -50,6 +52,7 @@ class StrategyIn:
     motion_weight: float | Unset = 0.0
     name: StrategyInName | Unset = StrategyInName.LOOKAHEAD
     seed: int | None | Unset = UNSET
+    simulations: int | Unset = 1000
 
 
 
@@ -81,6 +84,8 @@ class StrategyIn:
         else:
             seed = self.seed
 
+        simulations = self.simulations
+
 
         field_dict: dict[str, Any] = {}
 
@@ -104,6 +109,8 @@ class StrategyIn:
             field_dict["name"] = name
         if seed is not UNSET:
             field_dict["seed"] = seed
+        if simulations is not UNSET:
+            field_dict["simulations"] = simulations
 
         return field_dict
 
@@ -146,6 +153,8 @@ class StrategyIn:
         seed = _parse_seed(d.pop("seed", UNSET))
 
 
+        simulations = d.pop("simulations", UNSET)
+
         strategy_in = cls(
             budget_ms=budget_ms,
             budget_work=budget_work,
@@ -156,6 +165,7 @@ class StrategyIn:
             motion_weight=motion_weight,
             name=name,
             seed=seed,
+            simulations=simulations,
         )
 
         return strategy_in
