@@ -13,6 +13,7 @@ from typing import TYPE_CHECKING, Any
 import numpy as np
 
 from planner.geometry import SHARE_SLACK
+from planner.planning.posed_set import CHUNK_ELEMENTS
 
 if TYPE_CHECKING:
     from planner.planning.posed_set import PosedSet
@@ -64,7 +65,16 @@ def _intersection(polygons: np.ndarray, probe: int = 16) -> Any:
 
 def _grid_depth(posed: PosedSet, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     """`contains_points` at the grid points (x, y) for y in ys, x in xs (row-major),
-    as (len(ys) * len(xs), H) bool: each row of the grid crosses a face at one x."""
+    as (len(ys) * len(xs), H) bool: each row of the grid crosses a face at one x.
+    Rows go in chunks of at most :data:`CHUNK_ELEMENTS` row x hypothesis x face cells."""
+    n_hyp, n_faces = posed.start.shape[:2]
+    step = max(1, CHUNK_ELEMENTS // max(1, n_hyp * n_faces))
+    parts = [_rows_inside(posed, xs, ys[i : i + step]) for i in range(0, len(ys), step)]
+    inside = np.concatenate(parts) if parts else np.zeros((0, len(xs), n_hyp), dtype=bool)
+    return inside.reshape(len(ys) * len(xs), -1)
+
+
+def _rows_inside(posed: PosedSet, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     y = ys[:, None, None]
     s, e = posed.start[None], posed.end[None]
     straddle = ((s[..., 1] > y) != (e[..., 1] > y)) & posed.valid[None]
@@ -75,7 +85,7 @@ def _grid_depth(posed: PosedSet, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     inside = np.zeros((len(ys), len(xs), len(posed)), dtype=bool)
     for f in range(x_cross.shape[-1]):
         inside ^= xs[None, :, None] < x_cross[:, None, :, f]
-    return inside.reshape(len(ys) * len(xs), -1)
+    return inside
 
 
 def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:

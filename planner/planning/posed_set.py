@@ -18,7 +18,10 @@ from planner.errors import PlannerError
 from planner.geometry import rotation_matrices
 from planner.types import Hypothesis, ObjectModel
 
-__all__ = ["PosedSet", "contains_points", "pose_hypotheses"]
+__all__ = ["CHUNK_ELEMENTS", "PosedSet", "contains_points", "pose_hypotheses"]
+
+#: The most point x hypothesis x face cells one pass over posed outlines holds at once.
+CHUNK_ELEMENTS = 1_000_000
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,9 +147,18 @@ def _rings(poses: list, model_of: np.ndarray, rot: np.ndarray, shift: np.ndarray
 def contains_points(posed: PosedSet, points: np.ndarray) -> np.ndarray:
     """(M, H) bool: is each world point inside each posed outline (holes excluded)?
 
-    Even-odd crossing count of a ray toward +x over all faces, in one pass.
+    Even-odd crossing count of a ray toward +x over all faces, points in chunks of at
+    most :data:`CHUNK_ELEMENTS` point x hypothesis x face cells.
     """
-    q = np.asarray(points, dtype=float)[:, None, None, :]
+    pts = np.asarray(points, dtype=float).reshape(-1, 2)
+    n_hyp, n_faces = posed.start.shape[:2]
+    step = max(1, CHUNK_ELEMENTS // max(1, n_hyp * n_faces))
+    parts = [_inside(posed, pts[i : i + step]) for i in range(0, len(pts), step)]
+    return np.concatenate(parts) if parts else np.zeros((0, n_hyp), dtype=bool)
+
+
+def _inside(posed: PosedSet, points: np.ndarray) -> np.ndarray:
+    q = points[:, None, None, :]
     s, e = posed.start[None], posed.end[None]
     straddle = (s[..., 1] > q[..., 1]) != (e[..., 1] > q[..., 1])
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):

@@ -33,6 +33,7 @@ from planner.planning.bitsets import (
 from planner.planning.candidate_generation import CandidateConfig, generate_candidates
 from planner.planning.candidates import Candidates
 from planner.planning.confusability import class_survivors, confusability, survivor_table
+from planner.planning.intersection_aims import _grid_depth
 from planner.planning.matching import SLOTS, Slots, slots_match
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import contains_points, pose_hypotheses
@@ -670,15 +671,24 @@ def test_bitsets_round_trip_over_several_words():
     assert table.matrix()[:, np.arange(70), np.arange(70)].all()
 
 
-def test_contains_points_agrees_with_shapely():
+@pytest.mark.parametrize("chunk", [1, 50, 1_000_000])
+def test_contains_points_agrees_with_shapely_in_chunks_of_any_size(chunk, monkeypatch):
+    # the point x hypothesis x face passes go in chunks: a round part's many faces
+    # times thousands of hypotheses must not be held at once
+    monkeypatch.setattr("planner.planning.posed_set.CHUNK_ELEMENTS", chunk)
+    monkeypatch.setattr("planner.planning.intersection_aims.CHUNK_ELEMENTS", chunk)
     rng = np.random.default_rng(2)
     hyps = [hyp(name, *rng.uniform(-5, 5, 2), rng.uniform(-3, 3)) for name in sorted(SHAPES)]
     posed = pose_hypotheses(hyps, MODELS)
     points = rng.uniform(-40, 40, (300, 2))
     inside = contains_points(posed, points)
+    xs, ys = np.linspace(-40, 40, 13), np.linspace(-30, 30, 7)
+    grid = _grid_depth(posed, xs, ys)
+    gx, gy = np.meshgrid(xs, ys)
     for h, (outline, holes) in enumerate(posed.rings):
         poly = shapely.Polygon(outline, list(holes))
         np.testing.assert_array_equal(inside[:, h], shapely.contains_xy(poly, *points.T))
+        np.testing.assert_array_equal(grid[:, h], shapely.contains_xy(poly, gx.ravel(), gy.ravel()))
 
 
 def _scene(n=8, seed=4):
