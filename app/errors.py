@@ -43,6 +43,7 @@ __all__ = [
     "LimitExceededError",
     "NotFoundError",
     "PreconditionFailedError",
+    "PreconditionRequiredError",
     "Problem",
     "UnauthorizedError",
     "UnavailableError",
@@ -120,6 +121,10 @@ class IdempotencyMismatchError(AppError):
 
 class PreconditionFailedError(AppError):
     status, slug, title = 412, "precondition-failed", "Precondition failed"
+
+
+class PreconditionRequiredError(AppError):
+    status, slug, title = 428, "precondition-required", "Precondition required"
 
 
 class UnauthorizedError(AppError):

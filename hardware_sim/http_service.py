@@ -394,10 +394,13 @@ class HttpService:
         return f"/v1/sessions/{self.session_id}/view"
 
     def delete(self) -> None:
-        """``DELETE /v1/sessions/{id}``."""
+        """``DELETE /v1/sessions/{id}`` (``If-Match`` the version this client holds)."""
+        held = f'"{self.version}"'
         self._send(
             "DELETE /v1/sessions/{id}",
-            lambda: delete_session.sync_detailed(self.session_id, client=self.client),
+            lambda: delete_session.sync_detailed(
+                self.session_id, client=self.client, if_match=held
+            ),
             204,
         )
 

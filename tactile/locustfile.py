@@ -25,6 +25,7 @@ from __future__ import annotations
 import json
 import math
 import os
+import uuid
 from importlib import resources
 
 import numpy as np
@@ -94,7 +95,8 @@ class _Fleet(FastHttpUser):
 
     def _delete(self, sid: str) -> None:
         url, name = self._at(f"/v1/sessions/{sid}", "DELETE /v1/sessions/{id}")
-        self.client.delete(url, name=name)
+        # a delete needs If-Match or an Idempotency-Key; this one request is the key
+        self.client.delete(url, name=name, headers={"Idempotency-Key": uuid.uuid4().hex})
 
 
 class Robot(_Fleet):

@@ -9,10 +9,16 @@ from fastapi import Request, Response
 from pydantic import BaseModel
 
 from app.convert import fingerprint
-from app.errors import Problem
+from app.errors import PreconditionRequiredError, Problem
 from app.service import Answer
 
-__all__ = ["PROBLEMS", "request_fingerprint", "respond"]
+__all__ = [
+    "PRECONDITION_REQUIRED",
+    "PROBLEMS",
+    "request_fingerprint",
+    "require_precondition",
+    "respond",
+]
 
 #: Error answers every route may give (their media type becomes application/problem+json).
 PROBLEMS: dict[int | str, dict[str, Any]] = {
@@ -29,12 +35,33 @@ PROBLEMS: dict[int | str, dict[str, Any]] = {
 }
 
 
+#: The answer of undo and delete without If-Match or an Idempotency-Key.
+PRECONDITION_REQUIRED: dict[int | str, dict[str, Any]] = {
+    428: {
+        "model": Problem,
+        "description": "needs If-Match (the session's ETag) or an Idempotency-Key",
+    }
+}
+
+
 def respond(answer: Answer, media_type: str = "application/json") -> Response:
     headers = dict(answer.headers)
     media_type = headers.pop("Content-Type", media_type)
     if answer.replayed:
         headers["Idempotent-Replayed"] = "true"
     return Response(answer.body, answer.status, headers=headers, media_type=media_type)
+
+
+def require_precondition(if_match: str | None, idempotency_key: str | None, what: str) -> None:
+    """Undo and delete act on "whatever is there now": without If-Match (or an
+    Idempotency-Key naming this one request) a client could undo another client's
+    acknowledged touch, or delete a session it has not seen. 428 names what to send."""
+    if if_match is None and idempotency_key is None:
+        raise PreconditionRequiredError(
+            f"{what} needs If-Match with the session's ETag (its version, as answered in "
+            "the ETag header) or an Idempotency-Key",
+            field="If-Match",
+        )
 
 
 def request_fingerprint(request: Request, body: BaseModel | None) -> str:

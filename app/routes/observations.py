@@ -3,7 +3,13 @@
 from fastapi import APIRouter, Request
 
 from app.deps import IdempotencyKey, IfMatch, ServiceDep, SessionId, auth_dependencies
-from app.routes import PROBLEMS, request_fingerprint, respond
+from app.routes import (
+    PRECONDITION_REQUIRED,
+    PROBLEMS,
+    request_fingerprint,
+    require_precondition,
+    respond,
+)
 from app.routes.sessions import HypothesisLimit
 from app.schemas import InputModels, SessionOut
 from app.settings import Settings
@@ -41,7 +47,7 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         )
         return respond(answer)
 
-    @router.delete("/last", response_model=SessionOut)
+    @router.delete("/last", response_model=SessionOut, responses=PRECONDITION_REQUIRED)
     async def undo_observation(
         session_id: SessionId,
         request: Request,
@@ -50,7 +56,10 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         idempotency_key: IdempotencyKey = None,
         limit: HypothesisLimit = None,
     ):
-        """Undo: drop the last observation and answer the session state before it."""
+        """Undo: drop the last observation and answer the session state before it.
+
+        Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both."""
+        require_precondition(if_match, idempotency_key, "undo")
         fp = request_fingerprint(request, None)
         answer = await service.undo(str(session_id), idempotency_key, fp, if_match, limit)
         return respond(answer)

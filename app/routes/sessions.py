@@ -5,7 +5,13 @@ from typing import Annotated
 from fastapi import APIRouter, Query, Request, Response
 
 from app.deps import IdempotencyKey, IfMatch, ServiceDep, SessionId, auth_dependencies
-from app.routes import PROBLEMS, request_fingerprint, respond
+from app.routes import (
+    PRECONDITION_REQUIRED,
+    PROBLEMS,
+    request_fingerprint,
+    require_precondition,
+    respond,
+)
 from app.schemas import InputModels, SessionOut
 from app.settings import Settings
 
@@ -54,9 +60,19 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         """The session: status, observations and hypotheses (most probable first)."""
         return respond(await service.get_session(str(session_id), limit))
 
-    @router.delete("/{session_id}", status_code=204, response_class=Response)
-    async def delete_session(session_id: SessionId, service: ServiceDep, if_match: IfMatch = None):
-        """Delete the session and its observations."""
+    @router.delete(
+        "/{session_id}", status_code=204, response_class=Response, responses=PRECONDITION_REQUIRED
+    )
+    async def delete_session(
+        session_id: SessionId,
+        service: ServiceDep,
+        if_match: IfMatch = None,
+        idempotency_key: IdempotencyKey = None,
+    ):
+        """Delete the session and its observations.
+
+        Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both."""
+        require_precondition(if_match, idempotency_key, "delete")
         await service.delete_session(str(session_id), if_match)
         return Response(status_code=204)
 

@@ -278,9 +278,25 @@ def test_undo_drops_the_last_observation(client):
     undone = r.json()
     assert undone["version"] == 4 and len(undone["observations"]) == 1
     assert undone["hypothesis_count"] > two["hypothesis_count"]
-    client.delete(f"{url}/observations/last")
-    r = client.delete(f"{url}/observations/last")
+    client.delete(f"{url}/observations/last", headers={"Idempotency-Key": "undo-2"})
+    r = client.delete(f"{url}/observations/last", headers={"If-Match": '"5"'})
     assert is_problem(r, 409) and r.json()["errors"][0]["field"] == "observations"
+
+
+def test_undo_and_delete_without_a_precondition_are_428_and_change_nothing(client):
+    # "undo whatever is last" could drop another client's acknowledged touch
+    s = create_session(client)
+    url = f"/v1/sessions/{s['id']}"
+    one = client.post(f"{url}/observations", json=BOTTOM).json()
+    for r in (client.delete(f"{url}/observations/last"), client.delete(url)):
+        assert is_problem(r, 428)
+        assert r.json()["errors"][0]["field"] == "If-Match"
+        assert "ETag" in r.json()["detail"]
+    assert client.get(url).json() == one
+    # a stale ETag is still 412, the right one undoes
+    assert is_problem(client.delete(f"{url}/observations/last", headers={"If-Match": '"1"'}), 412)
+    r = client.delete(f"{url}/observations/last", headers={"If-Match": f'"{one["version"]}"'})
+    assert r.status_code == 200 and r.json()["observations"] == []
 
 
 def test_impossible_touch_is_inconsistent_not_an_error_and_undo_recovers(client):
@@ -293,7 +309,7 @@ def test_impossible_touch_is_inconsistent_not_an_error_and_undo_recovers(client)
     assert r.json()["status"] == "inconsistent" and r.json()["hypotheses"] == []
     plan = client.get(f"{url}/plan").json()
     assert plan["status"] == "inconsistent" and plan["paths"] == []
-    back = client.delete(f"{url}/observations/last").json()
+    back = client.delete(f"{url}/observations/last", headers={"Idempotency-Key": "u"}).json()
     assert back["status"] == before["status"] and back["hypotheses"] == before["hypotheses"]
 
 
@@ -310,9 +326,9 @@ def test_delete_session(client):
     s = create_session(client)
     url = f"/v1/sessions/{s['id']}"
     assert is_problem(client.delete(url, headers={"If-Match": '"7"'}), 412)
-    assert client.delete(url).status_code == 204
+    assert client.delete(url, headers={"If-Match": '"1"'}).status_code == 204
     assert is_problem(client.get(url), 404)
-    assert is_problem(client.delete(url), 404)
+    assert is_problem(client.delete(url, headers={"If-Match": '"1"'}), 404)
     assert is_problem(client.post(f"{url}/observations", json=BOTTOM), 404)
 
 

@@ -41,7 +41,8 @@ def test_a_host_that_never_saw_a_session_resumes_it_from_its_snapshot(
         assert r.status_code == 201 and r.json()["version"] == expected["version"] + 1
         assert second.get(f"/v1/sessions/{sid}/plan").status_code == 200
         # an undo goes back to the snapshot before the last one
-        undone = second.delete(f"/v1/sessions/{sid}/observations/last").json()
+        last = f"/v1/sessions/{sid}/observations/last"
+        undone = second.delete(last, headers={"If-Match": f'"{r.json()["version"]}"'}).json()
         assert undone["observations"] == expected["observations"]
         assert undone["hypotheses"] == expected["hypotheses"]
 

@@ -117,6 +117,13 @@ def _parse_response(*, client: AuthenticatedClient | Client, response: httpx.Res
 
         return response_422
 
+    if response.status_code == 428:
+        response_428 = Problem.from_dict(response.json())
+
+
+
+        return response_428
+
     if client.raise_on_unexpected_status:
         raise errors.UnexpectedStatus(response.status_code, response.content)
     else:
@@ -144,6 +151,8 @@ def sync_detailed(
     """ Undo Observation
 
      Undo: drop the last observation and answer the session state before it.
+
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
 
     Args:
         session_id (UUID): session id (a random UUID)
@@ -189,6 +198,8 @@ def sync(
 
      Undo: drop the last observation and answer the session state before it.
 
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
+
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | None | Unset): at most this many hypotheses
@@ -227,6 +238,8 @@ async def asyncio_detailed(
     """ Undo Observation
 
      Undo: drop the last observation and answer the session state before it.
+
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
 
     Args:
         session_id (UUID): session id (a random UUID)
@@ -271,6 +284,8 @@ async def asyncio(
     """ Undo Observation
 
      Undo: drop the last observation and answer the session state before it.
+
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
 
     Args:
         session_id (UUID): session id (a random UUID)

@@ -19,11 +19,15 @@ def _get_kwargs(
     session_id: UUID,
     *,
     if_match: None | str | Unset = UNSET,
+    idempotency_key: None | str | Unset = UNSET,
 
 ) -> dict[str, Any]:
     headers: dict[str, Any] = {}
     if not isinstance(if_match, Unset):
         headers["If-Match"] = if_match
+
+    if not isinstance(idempotency_key, Unset):
+        headers["Idempotency-Key"] = idempotency_key
 
 
 
@@ -96,6 +100,13 @@ def _parse_response(*, client: AuthenticatedClient | Client, response: httpx.Res
 
         return response_422
 
+    if response.status_code == 428:
+        response_428 = Problem.from_dict(response.json())
+
+
+
+        return response_428
+
     if client.raise_on_unexpected_status:
         raise errors.UnexpectedStatus(response.status_code, response.content)
     else:
@@ -116,16 +127,21 @@ def sync_detailed(
     *,
     client: AuthenticatedClient | Client,
     if_match: None | str | Unset = UNSET,
+    idempotency_key: None | str | Unset = UNSET,
 
 ) -> Response[Any | Problem]:
     """ Delete Session
 
      Delete the session and its observations.
 
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
+
     Args:
         session_id (UUID): session id (a random UUID)
         if_match (None | str | Unset): the session's ETag ("<version>"); a stale one is answered
             412
+        idempotency_key (None | str | Unset): replays the first answer to a retried request (other
+            body: 422)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -139,6 +155,7 @@ def sync_detailed(
     kwargs = _get_kwargs(
         session_id=session_id,
 if_match=if_match,
+idempotency_key=idempotency_key,
 
     )
 
@@ -153,16 +170,21 @@ def sync(
     *,
     client: AuthenticatedClient | Client,
     if_match: None | str | Unset = UNSET,
+    idempotency_key: None | str | Unset = UNSET,
 
 ) -> Any | Problem | None:
     """ Delete Session
 
      Delete the session and its observations.
 
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
+
     Args:
         session_id (UUID): session id (a random UUID)
         if_match (None | str | Unset): the session's ETag ("<version>"); a stale one is answered
             412
+        idempotency_key (None | str | Unset): replays the first answer to a retried request (other
+            body: 422)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -177,6 +199,7 @@ def sync(
         session_id=session_id,
 client=client,
 if_match=if_match,
+idempotency_key=idempotency_key,
 
     ).parsed
 
@@ -185,16 +208,21 @@ async def asyncio_detailed(
     *,
     client: AuthenticatedClient | Client,
     if_match: None | str | Unset = UNSET,
+    idempotency_key: None | str | Unset = UNSET,
 
 ) -> Response[Any | Problem]:
     """ Delete Session
 
      Delete the session and its observations.
 
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
+
     Args:
         session_id (UUID): session id (a random UUID)
         if_match (None | str | Unset): the session's ETag ("<version>"); a stale one is answered
             412
+        idempotency_key (None | str | Unset): replays the first answer to a retried request (other
+            body: 422)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -208,6 +236,7 @@ async def asyncio_detailed(
     kwargs = _get_kwargs(
         session_id=session_id,
 if_match=if_match,
+idempotency_key=idempotency_key,
 
     )
 
@@ -222,16 +251,21 @@ async def asyncio(
     *,
     client: AuthenticatedClient | Client,
     if_match: None | str | Unset = UNSET,
+    idempotency_key: None | str | Unset = UNSET,
 
 ) -> Any | Problem | None:
     """ Delete Session
 
      Delete the session and its observations.
 
+    Needs If-Match (the session's ETag) or an Idempotency-Key: 428 without both.
+
     Args:
         session_id (UUID): session id (a random UUID)
         if_match (None | str | Unset): the session's ETag ("<version>"); a stale one is answered
             412
+        idempotency_key (None | str | Unset): replays the first answer to a retried request (other
+            body: 422)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -246,5 +280,6 @@ async def asyncio(
         session_id=session_id,
 client=client,
 if_match=if_match,
+idempotency_key=idempotency_key,
 
     )).parsed
