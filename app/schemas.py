@@ -130,6 +130,7 @@ class StrategyOut(BaseModel):
     motion_weight: float
     grid_size: int
     forecast: int = 1
+    simulations: int = 1000
     seed: int | None = None
 
 
@@ -174,6 +175,65 @@ class SessionOut(BaseModel):
     class_count: int = Field(ge=0, description="equivalence classes left")
     accuracy: AccuracyOut
     localization: LocalizationOut
+
+
+class ReportContactOut(BaseModel):
+    point: Vec2Out
+    normal: Vec2Out = Field(description="measured outward unit normal")
+
+
+class ReportTouchOut(BaseModel):
+    """One touch with its residuals against the most probable hypothesis."""
+
+    index: int = Field(ge=0)
+    kind: Literal["contact", "spurious", "miss"] = Field(
+        description="a contact on a face of the answer, a contact the answer calls "
+        "spurious, or a path that touched nothing"
+    )
+    path: PathOut
+    contact: ReportContactOut | None
+    face: int | None = Field(description="the answer's face the contact lies on")
+    distance: float | None = Field(description="length from the contact point to that posed face")
+    normal_angle: float | None = Field(
+        description="radians from the posed face's outward normal to the measured one, "
+        "counter-clockwise positive"
+    )
+    clearance: float | None = Field(
+        description="a miss: how far the path passed from the answer's posed outline"
+    )
+
+
+class ReportBoundOut(BaseModel):
+    translation: float | None
+    rotation: float | None = Field(description="radians")
+    eps_t: float | None = Field(description="error disk diameter")
+
+
+class ReportResultOut(BaseModel):
+    """The answer: the most probable hypothesis, its class' probability and bound."""
+
+    object: str
+    stable_pose: int = Field(ge=0)
+    pose: PoseOut
+    bound: ReportBoundOut = Field(description="the bound `localized` is judged on")
+    probability: float = Field(ge=0, le=1)
+    class_probability: float = Field(ge=0, le=1)
+    classes: int = Field(ge=0, description="equivalence classes left")
+    missing: list[Literal["one_class", "accuracy"]]
+
+
+class ReportOut(BaseModel):
+    """A session's report: each touch with its residuals, the answer with its bound,
+    probability and status (report.csv has the same in rows)."""
+
+    id: str
+    version: int = Field(ge=1)
+    status: Status
+    objects: list[str]
+    sensor: SensorOut
+    accuracy: AccuracyOut
+    touches: list[ReportTouchOut]
+    result: ReportResultOut | None = Field(description="null without a hypothesis")
 
 
 class PlannedPathOut(BaseModel):

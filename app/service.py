@@ -41,6 +41,7 @@ from app.convert import (
     plan_rng,
     session_json,
     strategy_config,
+    to_json,
 )
 from app.errors import (
     ConflictError,
@@ -441,6 +442,21 @@ class SessionService:
                 self.pictures.put(key, image)
         media = "image/svg+xml" if kind == "svg" else "image/png"
         return Answer(200, image, {"ETag": etag(record.version), "Content-Type": media})
+
+    async def report(self, session_id: str, kind: str) -> Answer:
+        """The session's report (:mod:`planner.report`) as JSON or CSV."""
+        from planner.report import report_csv, session_report
+
+        async with self.locks.hold(session_id):
+            record = await self._record(session_id)
+            session = await self._session(record)
+        data = await self.run_light(session_report, session)
+        headers = {"ETag": etag(record.version)}
+        if kind == "csv":
+            headers["Content-Type"] = "text/csv; charset=utf-8"
+            return Answer(200, report_csv(data).encode(), headers)
+        body = to_json({"id": session_id, "version": record.version, **data})
+        return Answer(200, body, headers)
 
     async def image_json(self, session_id: str) -> Answer:
         """The MII's world geometry as JSON (cached per version), for the live viewer."""

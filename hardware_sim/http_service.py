@@ -38,7 +38,12 @@ import httpx
 
 from hardware_sim.api_client import Client
 from hardware_sim.api_client.api.observations import add_observation
-from hardware_sim.api_client.api.pictures import get_image_png, get_image_svg
+from hardware_sim.api_client.api.pictures import (
+    get_image_png,
+    get_image_svg,
+    get_report_csv,
+    get_report_json,
+)
 from hardware_sim.api_client.api.plan import get_plan
 from hardware_sim.api_client.api.sessions import create_session, delete_session, get_session
 from hardware_sim.api_client.models import (
@@ -374,6 +379,21 @@ class HttpService:
                     self.session_id, client=self.client, view=kind_svg
                 )
 
+        return self._content(operation, send)
+
+    def report(self, fmt: str = "json") -> bytes:
+        """The session's report (``report.json`` or ``report.csv``): each touch with its
+        residuals, the answer with its bound, probability and status."""
+        if fmt not in ("json", "csv"):
+            raise ValueError("fmt must be 'json' or 'csv'")
+        call = get_report_json if fmt == "json" else get_report_csv
+        return self._content(
+            f"GET /v1/sessions/{{id}}/report.{fmt}",
+            lambda: call.sync_detailed(self.session_id, client=self.client),
+        )
+
+    def _content(self, operation: str, send: Callable[[], Response[Any]]) -> bytes:
+        """The body of a 200 answer to `send`, retrying transport failures."""
         pause = self.backoff_s
         for attempt in range(self.retries + 1):
             try:

@@ -143,8 +143,8 @@ def workspace_to_dict(workspace: Workspace) -> dict[str, Any]:
 
 
 def strategy_to_dict(strategy: Mapping[str, Any]) -> dict[str, Any]:
-    """A session's strategy settings as answered (``forecast`` 1 and ``seed`` None
-    when missing, as in sessions stored before they existed)."""
+    """A session's strategy settings as answered (``forecast`` 1, ``simulations`` 1000
+    and ``seed`` None when missing, as in sessions stored before they existed)."""
     seed = strategy.get("seed")
     return {
         "name": str(strategy["name"]),
@@ -155,6 +155,7 @@ def strategy_to_dict(strategy: Mapping[str, Any]) -> dict[str, Any]:
         "motion_weight": float(strategy["motion_weight"]),
         "grid_size": int(strategy["grid_size"]),
         "forecast": int(strategy.get("forecast", 1)),
+        "simulations": int(strategy.get("simulations", 1000)),
         "seed": None if seed is None else int(seed),
     }
 

@@ -154,7 +154,7 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     def demo(url: str) -> int:
         code = run_demo(url, str(objects), args.seed, args.max_touches, sys.stdout, picture,
-                        args.sensor)  # fmt: skip
+                        args.sensor, report=args.report)  # fmt: skip
         if args.linger > 0:
             print(f"serving for {args.linger:g} s more (Ctrl-C stops)", flush=True)
             with contextlib.suppress(KeyboardInterrupt):
@@ -205,6 +205,14 @@ def build_parser() -> argparse.ArgumentParser:
     )
     demo.add_argument(
         "--out", type=_picture, default="tactile-demo.png", help="the final picture (.png or .svg)"
+    )
+    demo.add_argument(
+        "--report",
+        type=Path,
+        default=None,
+        metavar="FILE",
+        help="write the session's report: each touch with its residuals, the answer "
+        "(FILE.csv: CSV, else JSON)",
     )
     demo.add_argument("--url", default=None, help="use a running service instead of starting one")
     demo.add_argument(

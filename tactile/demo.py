@@ -75,9 +75,11 @@ def run_demo(
     picture: Path,
     sensor: str = "bounded",
     client: Client | None = None,
+    report: Path | None = None,
 ) -> int:
     """Recognize one random object of `objects` (an object file) through the service
-    at `base_url`; write the session's picture to `picture` (.png or .svg).
+    at `base_url`; write the session's picture to `picture` (.png or .svg) and, given
+    `report`, the session's report there (.csv: CSV, else JSON).
 
     Exit code 0 when localized with the right object and stable pose and the true
     outline within the estimate's error disk (eps_t / 2), as the experiments judge."""
@@ -123,6 +125,9 @@ def run_demo(
         print(f"picture: {picture}", file=out)
     except ServiceError as exc:
         print(f"no picture: {exc}", file=out)
+    if report is not None:
+        report.write_bytes(service.report("csv" if report.suffix.lower() == ".csv" else "json"))
+        print(f"report: {report}", file=out)
     print(f"live view: {view}", file=out)
     return 0 if ok else 1
 

@@ -1,4 +1,5 @@
-"""Pictures of the multi-interpretation image (the planner's `render`)."""
+"""Pictures of the multi-interpretation image (the planner's `render`), and the
+session's report (the planner's `report`)."""
 
 from typing import Annotated, Literal
 
@@ -6,7 +7,7 @@ from fastapi import APIRouter, Query, Response
 
 from app.deps import ServiceDep, SessionId, auth_dependencies
 from app.routes import PROBLEMS, respond
-from app.schemas import InputModels
+from app.schemas import InputModels, ReportOut
 from app.settings import Settings
 
 __all__ = ["build_router"]
@@ -47,5 +48,22 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
     ):
         """The same picture as image.svg, as PNG."""
         return respond(await service.picture(str(session_id), "png", view, dpi))
+
+    @router.get("/report.json", response_model=ReportOut, tags=["reports"])
+    async def get_report_json(session_id: SessionId, service: ServiceDep):
+        """The report: each touch with its residuals against the most probable
+        hypothesis, and that hypothesis with its bound, probability and status."""
+        return respond(await service.report(str(session_id), "json"))
+
+    @router.get(
+        "/report.csv",
+        response_class=Response,
+        tags=["reports"],
+        responses={200: {"content": {"text/csv": {}}, "description": "the report as CSV"}},
+    )
+    async def get_report_csv(session_id: SessionId, service: ServiceDep):
+        """The same report as CSV: a row per touch (`row` touch), then the answer
+        (`row` result); empty cells where a column does not apply."""
+        return respond(await service.report(str(session_id), "csv"))
 
     return router

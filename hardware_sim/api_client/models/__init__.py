@@ -28,6 +28,14 @@ from .planned_path_out import PlannedPathOut
 from .planned_path_out_scored_by import PlannedPathOutScoredBy
 from .pose_out import PoseOut
 from .problem import Problem
+from .report_bound_out import ReportBoundOut
+from .report_contact_out import ReportContactOut
+from .report_out import ReportOut
+from .report_out_status import ReportOutStatus
+from .report_result_out import ReportResultOut
+from .report_result_out_missing_item import ReportResultOutMissingItem
+from .report_touch_out import ReportTouchOut
+from .report_touch_out_kind import ReportTouchOutKind
 from .sensor_in import SensorIn
 from .sensor_out import SensorOut
 from .session_create import SessionCreate
@@ -70,6 +78,14 @@ __all__ = (
     "PlanOutStoppedByType0",
     "PoseOut",
     "Problem",
+    "ReportBoundOut",
+    "ReportContactOut",
+    "ReportOut",
+    "ReportOutStatus",
+    "ReportResultOut",
+    "ReportResultOutMissingItem",
+    "ReportTouchOut",
+    "ReportTouchOutKind",
     "SensorIn",
     "SensorOut",
     "SessionCreate",

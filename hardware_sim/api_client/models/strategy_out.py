@@ -33,6 +33,7 @@ class StrategyOut:
             name (str):
             forecast (int | Unset):  Default: 1.
             seed (int | None | Unset):
+            simulations (int | Unset):  Default: 1000.
      """
 
     budget_ms: float
@@ -44,6 +45,7 @@ class StrategyOut:
     name: str
     forecast: int | Unset = 1
     seed: int | None | Unset = UNSET
+    simulations: int | Unset = 1000
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -73,6 +75,8 @@ class StrategyOut:
         else:
             seed = self.seed
 
+        simulations = self.simulations
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -89,6 +93,8 @@ class StrategyOut:
             field_dict["forecast"] = forecast
         if seed is not UNSET:
             field_dict["seed"] = seed
+        if simulations is not UNSET:
+            field_dict["simulations"] = simulations
 
         return field_dict
 
@@ -123,6 +129,8 @@ class StrategyOut:
         seed = _parse_seed(d.pop("seed", UNSET))
 
 
+        simulations = d.pop("simulations", UNSET)
+
         strategy_out = cls(
             budget_ms=budget_ms,
             budget_work=budget_work,
@@ -133,6 +141,7 @@ class StrategyOut:
             name=name,
             forecast=forecast,
             seed=seed,
+            simulations=simulations,
         )
 
 
