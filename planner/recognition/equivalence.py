@@ -37,11 +37,19 @@ from scipy.spatial import cKDTree
 from planner.geometry import rotation_matrices
 from planner.types import StablePose
 
-__all__ = ["SUPPORT_DIRECTIONS", "SYMMETRY_FLOOR", "PosedRings", "equivalence_classes"]
+__all__ = [
+    "CHUNK_ELEMENTS",
+    "SUPPORT_DIRECTIONS",
+    "SYMMETRY_FLOOR",
+    "PosedRings",
+    "equivalence_classes",
+]
 
 #: Smallest symmetry tolerance, as a share of the scene's scale: exact sensing
 #: still leaves rounding between the rotations of a symmetric outline.
 SYMMETRY_FLOOR = 1e-6
+#: The most point x face pairs one pass of the outline distance holds at once.
+CHUNK_ELEMENTS = 1_000_000
 #: Points measured inside each face, besides its ends.
 EDGE_SAMPLES = 7
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
@@ -101,14 +109,20 @@ def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> 
     """Distance of hypothesis `i` of `a` to each hypothesis `rows` of `b`: the larger
     of the two directed boundary-to-face distances between their posed outlines."""
     rows = np.asarray(rows, dtype=np.int64)
-    if not len(rows):
-        return np.zeros(0)
-    one = np.broadcast_to(a.points[i], (len(rows), *a.points[i].shape))
-    starts = np.broadcast_to(a.starts[i], (len(rows), *a.starts[i].shape))
-    ends = np.broadcast_to(a.ends[i], (len(rows), *a.ends[i].shape))
-    there = _to_faces(one, b.starts[rows], b.ends[rows])
-    back = _to_faces(b.points[rows], starts, ends)
-    return np.maximum(there, back)
+    # rows in chunks of at most CHUNK_ELEMENTS point x face pairs: a round outline has
+    # hundreds of faces, and all its rotations are near one another
+    cells = a.points.shape[1] * b.starts.shape[1] + b.points.shape[1] * a.starts.shape[1]
+    step = max(1, CHUNK_ELEMENTS // max(1, cells))
+    out = np.zeros(len(rows))
+    for lo in range(0, len(rows), step):
+        part = rows[lo : lo + step]
+        one = np.broadcast_to(a.points[i], (len(part), *a.points[i].shape))
+        starts = np.broadcast_to(a.starts[i], (len(part), *a.starts[i].shape))
+        ends = np.broadcast_to(a.ends[i], (len(part), *a.ends[i].shape))
+        there = _to_faces(one, b.starts[part], b.ends[part])
+        back = _to_faces(b.points[part], starts, ends)
+        out[lo : lo + step] = np.maximum(there, back)
+    return out
 
 
 def equivalence_classes(

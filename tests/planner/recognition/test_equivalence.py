@@ -16,7 +16,7 @@ import shapely
 
 from hardware_sim.world import random_world
 from planner.models.library import object_from_dict
-from planner.recognition.equivalence import PosedRings, equivalence_classes
+from planner.recognition.equivalence import PosedRings, equivalence_classes, outline_distance
 from planner.recognition.session import Session
 from planner.types import Accuracy, ObjectModel, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
@@ -91,6 +91,18 @@ def test_a_disc_is_one_class_whatever_its_rotation():
     thetas = {round(h.pose.theta, 6) for h in session.hypotheses}
     assert len(thetas) > 1  # the rotations the contacts cannot fix
     assert len({h.equivalence_class for h in session.hypotheses}) == 1
+
+
+def test_outline_distance_is_the_same_in_chunks_of_any_size(monkeypatch):
+    # rows go in chunks so that a round outline's rotations never fill the memory
+    ring = [[30 * math.cos(k * math.pi / 24), 20 * math.sin(k * math.pi / 24)] for k in range(48)]
+    stable = object_from_dict({"name": "ellipse", "outline": ring}).stable_poses[0]
+    theta = np.linspace(0, 0.3, 9)
+    rings = PosedRings.of(stable, theta, np.column_stack([theta * 3, np.zeros(9)]))
+    whole = outline_distance(rings, 0, rings, np.arange(9))
+    monkeypatch.setattr("planner.recognition.equivalence.CHUNK_ELEMENTS", 1)
+    np.testing.assert_array_equal(outline_distance(rings, 0, rings, np.arange(9)), whole)
+    assert whole[0] < 1e-9 and np.all(np.diff(whole) > 0)
 
 
 def test_classes_do_not_chain():
