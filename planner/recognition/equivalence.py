@@ -24,12 +24,23 @@ faces and back, the support functions ``h(u) = max_v u.v`` of the two vertex
 sets differ by at most d in every direction u, so a k-d tree over the support
 values in a few directions (max norm) finds every candidate pair, and the
 work grows with the hypotheses and the faces, not with their pairs.
+
+Each candidate pair is then decided without measuring every point against every
+face: the points of one outline, moved into the other's model frame, query one
+k-d tree of points spaced at most h along that model's faces (built once per
+stable pose). The nearest tree point is at most h/2 farther than the nearest
+face point, so a point within tau/2 of a tree point passes, one farther than
+tau/2 + h/2 fails its pair, and only the points in between are measured
+exactly against the faces: the same answer as the exact distance, at a cost
+that grows with the points, not with points x faces (a round outline drawn
+with hundreds of faces, whose rotations are all near one another).
 """
 
 from __future__ import annotations
 
+import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from scipy.spatial import cKDTree
@@ -39,10 +50,13 @@ from planner.types import StablePose
 
 __all__ = [
     "CHUNK_ELEMENTS",
+    "MAX_TREE_POINTS",
     "SUPPORT_DIRECTIONS",
     "SYMMETRY_FLOOR",
     "PosedRings",
     "equivalence_classes",
+    "outline_distance",
+    "within",
 ]
 
 #: Smallest symmetry tolerance, as a share of the scene's scale: exact sensing
@@ -50,6 +64,8 @@ __all__ = [
 SYMMETRY_FLOOR = 1e-6
 #: The most point x face pairs one pass of the outline distance holds at once.
 CHUNK_ELEMENTS = 1_000_000
+#: The most points one stable pose's k-d tree holds along its faces.
+MAX_TREE_POINTS = 20_000
 #: Points measured inside each face, besides its ends.
 EDGE_SAMPLES = 7
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
@@ -64,18 +80,25 @@ class PosedRings:
     boundary in the world frame (every vertex and `EDGE_SAMPLES` points inside
     each face), `starts`/`ends` (N, F, 2) of every face, and `support` (N, K): the
     support function of the vertices in the K directions of
-    :data:`SUPPORT_DIRECTIONS`."""
+    :data:`SUPPORT_DIRECTIONS`; the poses `theta` (N,) and `t` (N, 2), and the
+    stable pose's faces in its model frame, `model_starts`/`model_ends` (F, 2)."""
 
     points: np.ndarray
     starts: np.ndarray
     ends: np.ndarray
     support: np.ndarray
+    theta: np.ndarray
+    t: np.ndarray
+    model_starts: np.ndarray
+    model_ends: np.ndarray
+    _trees: dict[float, tuple[cKDTree, float]] = field(default_factory=dict, repr=False)
 
     @classmethod
     def of(cls, stable: StablePose, theta: np.ndarray, t: np.ndarray) -> PosedRings:
         """The stable pose moved to each pose (theta (N,), t (N, 2)):
         ``v_world = R(theta) v_model + t``."""
-        R = rotation_matrices(np.asarray(theta, dtype=float))
+        theta = np.asarray(theta, dtype=float).reshape(-1)
+        R = rotation_matrices(theta)
         t = np.asarray(t, dtype=float).reshape(-1, 2)
 
         def move(points: np.ndarray) -> np.ndarray:
@@ -86,10 +109,37 @@ class PosedRings:
         along = faces.start[:, None, :] + share[None, :, None] * (faces.end - faces.start)[:, None]
         starts = move(faces.start)
         support = (starts @ SUPPORT_DIRECTIONS.T).max(axis=1)
-        return cls(move(along.reshape(-1, 2)), starts, move(faces.end), support)
+        return cls(
+            move(along.reshape(-1, 2)), starts, move(faces.end), support, theta, t,
+            np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float),
+        )  # fmt: skip
 
     def __len__(self) -> int:
         return len(self.support)
+
+    def to_model(self, points: np.ndarray, rows: np.ndarray) -> np.ndarray:
+        """World points (M, P, 2) into the model frame of hypotheses `rows` (M,):
+        ``v_model = R(theta)^T (v_world - t)``."""
+        R = rotation_matrices(self.theta[rows])
+        return np.einsum("mji,mpj->mpi", R, points - self.t[rows, None, :])
+
+    def tree(self, spacing: float) -> tuple[cKDTree, float]:
+        """A k-d tree of points along the model's faces at most `h` apart (h: the
+        spacing asked for, or wider so that the tree holds at most
+        :data:`MAX_TREE_POINTS`), and h."""
+        known = self._trees.get(spacing)
+        if known is None:
+            e = self.model_ends - self.model_starts
+            length = np.hypot(e[:, 0], e[:, 1])
+            h = max(spacing, float(length.sum()) / MAX_TREE_POINTS, 1e-300)
+            steps = np.maximum(1, np.ceil(length / h)).astype(np.int64)
+            face = np.repeat(np.arange(len(length)), steps + 1)
+            first = np.repeat(np.cumsum(steps + 1) - (steps + 1), steps + 1)
+            u = (np.arange(len(face)) - first) / steps[face]
+            pts = self.model_starts[face] + u[:, None] * e[face]
+            known = (cKDTree(pts), float((length / steps).max(initial=0.0)))
+            self._trees[spacing] = known
+        return known
 
 
 def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
@@ -125,6 +175,65 @@ def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> 
     return out
 
 
+def _point_faces(q: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """(k,) distance from each point q (k, 2) to the nearest of the faces (F, 2 each),
+    in chunks of at most CHUNK_ELEMENTS point x face pairs."""
+    out = np.zeros(len(q))
+    step = max(1, CHUNK_ELEMENTS // max(1, len(starts)))
+    for lo in range(0, len(q), step):
+        out[lo : lo + step] = _nearest_face(q[lo : lo + step], starts, ends)
+    return out
+
+
+def _nearest_face(q: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    p = q[:, None, :]
+    e = ends - starts
+    sq = np.maximum(np.einsum("fi,fi->f", e, e), 1e-300)
+    u = np.clip(np.einsum("kfi,fi->kf", p - starts, e) / sq, 0.0, 1.0)
+    gap = p - (starts + u[..., None] * e)
+    return np.sqrt(np.einsum("kfi,kfi->kf", gap, gap).min(axis=1))
+
+
+def _all_within(
+    points: np.ndarray, target: PosedRings, rows: np.ndarray, limit: float
+) -> np.ndarray:
+    """(M,) bool: does every point of points[m] (M, P, 2, world) lie within `limit`
+    of the faces of target hypothesis rows[m]? Decided by the target's k-d tree,
+    exactly measured only for points within h/2 of the threshold."""
+    tree, h = target.tree(limit / 2)
+    q = target.to_model(points, rows)
+    d, _ = tree.query(q.reshape(-1, 2), distance_upper_bound=limit + h / 2 + 1e-12)
+    d = d.reshape(q.shape[:2])
+    ok = np.all(d <= limit + h / 2 + 1e-12, axis=1)  # a point farther fails its pair
+    unsure = (d > limit) & ok[:, None]
+    m, k = np.nonzero(unsure)
+    if len(m):
+        exact = _point_faces(q[m, k], target.model_starts, target.model_ends)
+        failed = np.unique(m[exact > limit])
+        ok[failed] = False
+    return ok
+
+
+def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float) -> np.ndarray:
+    """(len(rows),) bool: ``outline_distance(a, i, b, rows) <= limit``, the same
+    answer, found through the k-d trees (see the module's note)."""
+    rows = np.asarray(rows, dtype=np.int64)
+    out = np.zeros(len(rows), dtype=bool)
+    if not math.isfinite(limit) or limit < 0:
+        return out if limit < 0 else np.ones(len(rows), dtype=bool)
+    step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
+    for lo in range(0, len(rows), step):
+        part = rows[lo : lo + step]
+        mine = np.broadcast_to(a.points[i], (len(part), *a.points[i].shape))
+        there = _all_within(mine, b, part, limit)
+        back = np.zeros(len(part), dtype=bool)
+        if there.any():
+            pick = part[there]
+            back[there] = _all_within(b.points[pick], a, np.full(len(pick), i), limit)
+        out[lo : lo + step] = there & back
+    return out
+
+
 def equivalence_classes(
     rings: Sequence[PosedRings], order: np.ndarray, family: np.ndarray, tau: float
 ) -> np.ndarray:
@@ -156,7 +265,7 @@ def equivalence_classes(
         g = group[leader]
         for h in np.unique(group[near]):
             mine = near[group[near] == h]
-            close = outline_distance(rings[g], local[leader], rings[h], local[mine]) <= tau / 2
+            close = within(rings[g], local[leader], rings[h], local[mine], tau / 2)
             label[mine[close]] = classes
         classes += 1
     return label

@@ -13,10 +13,17 @@ import math
 import numpy as np
 import pytest
 import shapely
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
 from planner.models.library import object_from_dict
-from planner.recognition.equivalence import PosedRings, equivalence_classes, outline_distance
+from planner.recognition.equivalence import (
+    PosedRings,
+    equivalence_classes,
+    outline_distance,
+    within,
+)
 from planner.recognition.session import Session
 from planner.types import Accuracy, ObjectModel, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
@@ -103,6 +110,27 @@ def test_outline_distance_is_the_same_in_chunks_of_any_size(monkeypatch):
     monkeypatch.setattr("planner.recognition.equivalence.CHUNK_ELEMENTS", 1)
     np.testing.assert_array_equal(outline_distance(rings, 0, rings, np.arange(9)), whole)
     assert whole[0] < 1e-9 and np.all(np.diff(whole) > 0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**16), st.floats(0.02, 3.0), st.sampled_from([3, 5, 48, 200]))
+def test_within_answers_as_the_exact_distance(seed, scale, n):
+    # the k-d tree decides most points; the answer must equal the exact distance's
+    rng = np.random.default_rng(seed)
+    k = np.arange(n)
+    radius = 30 * (1 + 0.3 * rng.random(n)) if n < 48 else 30 * np.ones(n)
+    ring = np.column_stack([radius * np.cos(2 * np.pi * k / n), radius * np.sin(2 * np.pi * k / n)])
+    stable = object_from_dict({"name": "p", "outline": ring.tolist()}).stable_poses[0]
+    theta = rng.normal(0, 0.05 * scale, 12)
+    t = rng.normal(0, scale, (12, 2))
+    rings = PosedRings.of(stable, theta, t)
+    exact = outline_distance(rings, 0, rings, np.arange(12))
+    # at the threshold itself the two frames round apart; a hair either side they agree
+    near = (exact[3] * (1 + 1e-9), exact[3] * (1 - 1e-9))
+    for limit in (*np.quantile(exact, [0.2, 0.5, 0.8]), *near, 0.0):
+        np.testing.assert_array_equal(
+            within(rings, 0, rings, np.arange(12), float(limit)), exact <= limit
+        )
 
 
 def test_classes_do_not_chain():
