@@ -123,6 +123,9 @@ class SessionService:
         self.locks = KeyedLocks()
         self.sessions: LRU[tuple[str, int], Session] = LRU(settings.session_cache_size)
         self.plans: LRU[tuple[Any, ...], Plan] = LRU(settings.plan_cache_size)
+        # plans being computed, by cache key: a second request for the same plan waits
+        # for the first instead of computing it again
+        self._planning: dict[tuple[Any, ...], anyio.Event] = {}
         self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
         self._in_flight: set[tuple[str, str]] = set()
 
@@ -406,40 +409,49 @@ class SessionService:
         position: tuple[float, float] | None = None,
     ) -> Plan:
         """The plan for the record's version from `position` (None: the session's
-        sensor_position), cached per (id, version, position)."""
+        sensor_position), cached per (id, version, position) and computed once at a
+        time per key. Runs without the session's lock: a plan is a function of one
+        version, and observations must not wait for it."""
         key = (record.id, record.version, position)
-        cached = self.plans.get(key)
+        while (cached := self.plans.get(key)) is None and key in self._planning:
+            await self._planning[key].wait()
         if cached is not None:
             return cached
-        cfg = record.config
-        rng = plan_rng(record.id, record.version, cfg["strategy"].get("seed"))
-        sensor_position = cfg["sensor_position"] if position is None else list(position)
-        result = await self.run_cpu(
-            lambda: plan_session(session, sensor_position, strategy_config(cfg), rng)
-        )
-        self.plans.put(key, result)
-        return result
+        done = self._planning[key] = anyio.Event()
+        try:
+            cfg = record.config
+            rng = plan_rng(record.id, record.version, cfg["strategy"].get("seed"))
+            sensor_position = cfg["sensor_position"] if position is None else list(position)
+            result = await self.run_cpu(
+                lambda: plan_session(session, sensor_position, strategy_config(cfg), rng)
+            )
+            self.plans.put(key, result)
+            return result
+        finally:
+            del self._planning[key]
+            done.set()
 
     async def get_plan(
         self, session_id: str, limit: int, position: tuple[float, float] | None = None
     ) -> Answer:
-        async with self.locks.hold(session_id):
+        async with self.locks.hold(session_id):  # the state only; the plan is computed after
             record = await self._record(session_id)
             session = await self._session(record)
-            result = await self._plan(record, session, position)
+        result = await self._plan(record, session, position)
         body = plan_json(result, record.version, limit)
         return Answer(200, body, {"ETag": etag(record.version)})
 
     async def picture(self, session_id: str, kind: str, view: str, dpi: int) -> Answer:
-        async with self.locks.hold(session_id):
+        async with self.locks.hold(session_id):  # the state only: observations go on
             record = await self._record(session_id)
             key = (session_id, record.version, kind, view, dpi)
             image = self.pictures.get(key)
             if image is None:
                 session = await self._session(record)
-                result = await self._plan(record, session)
-                image = await self.run_cpu(self._draw, session, result, record, kind, view, dpi)
-                self.pictures.put(key, image)
+        if image is None:
+            result = await self._plan(record, session)
+            image = await self.run_cpu(self._draw, session, result, record, kind, view, dpi)
+            self.pictures.put(key, image)
         media = "image/svg+xml" if kind == "svg" else "image/png"
         return Answer(200, image, {"ETag": etag(record.version), "Content-Type": media})
 
@@ -462,15 +474,16 @@ class SessionService:
         """The MII's world geometry as JSON (cached per version), for the live viewer."""
         from app.viewer import mii_json
 
-        async with self.locks.hold(session_id):
+        async with self.locks.hold(session_id):  # the state only: observations go on
             record = await self._record(session_id)
             key = (session_id, record.version, "json")
             body = self.pictures.get(key)
             if body is None:
                 session = await self._session(record)
-                data = await self.run_cpu(mii_json, session, record.config["sensor_position"])
-                body = json.dumps(data).encode()
-                self.pictures.put(key, body)
+        if body is None:
+            data = await self.run_cpu(mii_json, session, record.config["sensor_position"])
+            body = json.dumps(data).encode()
+            self.pictures.put(key, body)
         return Answer(200, body, {"ETag": etag(record.version)})
 
     @staticmethod

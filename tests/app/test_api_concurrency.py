@@ -3,12 +3,14 @@ and idempotent retries (the store itself: test_store.py)."""
 
 from __future__ import annotations
 
+import importlib
 import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from tests.app.api_support import api, create_session, miss
+from tests.app.api_support import BOTTOM, api, create_session, miss
 
 THREADS = 8
 PER_THREAD = 3
@@ -97,3 +99,71 @@ def test_idempotent_retries_store_once(client):
     assert later.headers["idempotent-replayed"] == "true"
     origins, _ = _origins(client, sid)
     assert origins == [round(-9 + 0.005, 4)]
+
+
+def _held(fn, started: threading.Event, release: threading.Event, gave_up: list[bool]):
+    """`fn` that, once called, waits until `release` (at most 10 s, then noting in
+    `gave_up` that it waited in vain) before working."""
+
+    def held(*args, **kwargs):
+        started.set()
+        gave_up.append(not release.wait(10))
+        return fn(*args, **kwargs)
+
+    return held
+
+
+@pytest.mark.parametrize(
+    ("reader", "target"),
+    [
+        ("plan", "app.service.plan_session"),
+        ("image.png", "app.service.plan_session"),
+        ("image.json", "app.viewer.mii_json"),
+    ],
+)
+def test_observations_do_not_wait_for_plans_or_pictures_of_the_same_session(
+    tmp_path, monkeypatch, reader, target
+):
+    # the read's computation is held until the observation has been answered: were the
+    # observation waiting for the read (its lock), the read would give up holding
+    # after 10 s and the observation would come back only after it
+    module, name = target.rsplit(".", 1)
+    started, release, gave_up = threading.Event(), threading.Event(), []
+    real = getattr(importlib.import_module(module), name)
+    monkeypatch.setattr(target, _held(real, started, release, gave_up))
+    with api(tmp_path, cpu_workers=2) as client:
+        sid = create_session(client)["id"]
+        url = f"/v1/sessions/{sid}"
+        assert client.post(f"{url}/observations", json=BOTTOM).status_code == 201
+        with ThreadPoolExecutor(1) as pool:
+            reading = pool.submit(client.get, f"{url}/{reader}")
+            assert started.wait(10)
+            r = client.post(f"{url}/observations", json=miss(1))
+            release.set()
+            assert r.status_code == 201 and r.json()["version"] == 3
+            assert reading.result().status_code == 200
+        assert gave_up == [False]  # the observation came back while the read was held
+
+
+def test_the_same_plan_asked_twice_at_once_is_computed_once(tmp_path, monkeypatch):
+    started, release, gave_up = threading.Event(), threading.Event(), []
+    import app.service
+
+    calls = []
+    real = app.service.plan_session
+
+    def counted(*args, **kwargs):
+        calls.append(1)
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(app.service, "plan_session", _held(counted, started, release, gave_up))
+    with api(tmp_path, cpu_workers=2) as client:
+        url = f"/v1/sessions/{create_session(client)['id']}/plan"
+        with ThreadPoolExecutor(2) as pool:
+            first = pool.submit(client.get, url)
+            assert started.wait(10)
+            second = pool.submit(client.get, url)
+            time.sleep(0.2)  # let the second request reach the wait for the first
+            release.set()
+            assert first.result().json() == second.result().json()
+    assert len(calls) == 1 and gave_up == [False]
