@@ -89,7 +89,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     _metrics_dir(args.workers)
     sock = bind_socket(args.host, args.port)
     host, port = sock.getsockname()[:2]
-    common = dict(UVICORN_OPTIONS)
+    common = dict(UVICORN_OPTIONS, limit_concurrency=settings.limit_concurrency)
     structlog.get_logger("app.serve").info(
         "listening",
         host=host,

@@ -50,6 +50,7 @@ from app.errors import (
     LimitExceededError,
     NotFoundError,
     PreconditionFailedError,
+    UnavailableError,
 )
 from app.session_config import resolve_models, session_config
 from app.settings import Settings
@@ -131,6 +132,15 @@ class SessionService:
 
     # -- running work off the event loop ----------------------------------------------------
     async def run_cpu(self, fn: Callable[..., _T], *args: Any) -> _T:
+        """Run `fn` on a CPU worker; when `max_cpu_queue` jobs already wait for one,
+        answer 503 with Retry-After instead of queueing without end."""
+        waiting = self.cpu.statistics().tasks_waiting
+        if self.cpu.available_tokens == 0 and waiting >= self.settings.max_cpu_queue:
+            raise UnavailableError(
+                f"busy: {waiting} fits and plans wait for a CPU worker "
+                f"(max_cpu_queue {self.settings.max_cpu_queue}); retry shortly",
+                headers={"Retry-After": "1"},
+            )
         return await anyio.to_thread.run_sync(fn, *args, limiter=self.cpu)
 
     async def run_light(self, fn: Callable[..., _T], *args: Any) -> _T:

@@ -41,6 +41,16 @@ class Settings(BaseSettings):
 
     # CPU work
     cpu_workers: int = Field(2, ge=1, le=256, description="fits and plans running at once")
+    max_cpu_queue: int = Field(
+        64,
+        ge=0,
+        le=1_000_000,
+        description="fits and plans that may wait for a CPU worker; more are answered 503 "
+        "with Retry-After (back-pressure instead of an ever longer wait)",
+    )
+    limit_concurrency: int | None = Field(
+        512, ge=1, le=1_000_000, description="connections uvicorn serves at once; more get 503"
+    )
 
     # request limits
     max_body_bytes: int = Field(1_000_000, ge=1024, le=1_000_000_000)

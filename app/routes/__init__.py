@@ -31,6 +31,7 @@ PROBLEMS: dict[int | str, dict[str, Any]] = {
         (412, "If-Match does not match the session's version"),
         (413, "request body too large"),
         (422, "invalid input; `errors` names each field"),
+        (503, "busy (fits and plans queued) or the store unavailable: retry after Retry-After"),
     ]
 }
 

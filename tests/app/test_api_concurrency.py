@@ -10,7 +10,7 @@ from concurrent.futures import ThreadPoolExecutor
 
 import pytest
 
-from tests.app.api_support import BOTTOM, api, create_session, miss
+from tests.app.api_support import BOTTOM, api, create_session, is_problem, miss
 
 THREADS = 8
 PER_THREAD = 3
@@ -167,3 +167,26 @@ def test_the_same_plan_asked_twice_at_once_is_computed_once(tmp_path, monkeypatc
             release.set()
             assert first.result().json() == second.result().json()
     assert len(calls) == 1 and gave_up == [False]
+
+
+def test_a_full_cpu_queue_answers_503_with_retry_after_and_recovers(tmp_path, monkeypatch):
+    # one CPU worker, no room to wait: while a plan holds the worker, another is refused
+    started, release, gave_up = threading.Event(), threading.Event(), []
+    import app.service
+
+    monkeypatch.setattr(
+        app.service, "plan_session", _held(app.service.plan_session, started, release, gave_up)
+    )
+    with api(tmp_path, cpu_workers=1, max_cpu_queue=0) as client:
+        a = f"/v1/sessions/{create_session(client)['id']}/plan"
+        b = f"/v1/sessions/{create_session(client)['id']}/plan"
+        with ThreadPoolExecutor(1) as pool:
+            first = pool.submit(client.get, a)
+            assert started.wait(10)
+            busy = client.get(b)
+            release.set()
+            assert first.result().status_code == 200
+        assert is_problem(busy, 503) and busy.headers["retry-after"] == "1"
+        assert "max_cpu_queue" in busy.json()["detail"]
+        assert client.get(b).status_code == 200  # the retry is served
+    assert gave_up and not any(gave_up)
