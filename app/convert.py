@@ -26,6 +26,7 @@ from planner.codec import (
     observation_from_dict,
     observation_to_dict,
     plan_to_dict,
+    prior_from_dict,
     session_to_dict,
 )
 from planner.models.library import object_from_dict
@@ -76,7 +77,9 @@ def build_session(record: SessionRecord) -> Session:
         models,
         SensorBounds(**cfg["sensor"]),
         Workspace(tuple(cfg["workspace"]["center"]), cfg["workspace"]["radius"]),
-        RecognitionConfig(max_outliers=cfg["max_outliers"]),
+        RecognitionConfig(
+            max_outliers=cfg["max_outliers"], prior=prior_from_dict(cfg.get("prior"))
+        ),
         [observation_from_dict(o) for o in record.observations],
         accuracy=accuracy_from_dict(cfg.get("accuracy")),
     )

@@ -156,6 +156,18 @@ class LocalizationOut(BaseModel):
     )
 
 
+class RegionOut(BaseModel):
+    center: Vec2Out
+    radius: float
+
+
+class PriorOut(BaseModel):
+    """The pose prior the session was created with."""
+
+    region: RegionOut | None
+    theta: list[float] | None = Field(description="[lo, hi] radians")
+
+
 class SessionOut(BaseModel):
     """A session's state: its configuration, observations and hypotheses (most probable
     first; `hypothesis_count` is the length before any ``?limit=``)."""
@@ -175,6 +187,7 @@ class SessionOut(BaseModel):
     class_count: int = Field(ge=0, description="equivalence classes left")
     accuracy: AccuracyOut
     localization: LocalizationOut
+    prior: PriorOut | None = None
 
 
 class ReportContactOut(BaseModel):
@@ -478,6 +491,27 @@ def _session_create(
         translation: Annotated[float, Field(gt=0, le=big)]
         rotation: Annotated[float, Field(gt=0, le=math.pi)]
 
+    class RegionIn(BaseModel):
+        """The object's area centroid lies within `radius` of `center` (world frame)."""
+
+        model_config = ConfigDict(extra="forbid", title="RegionIn")
+        center: t.Vec2
+        radius: Annotated[float, Field(gt=0, le=big)]
+
+    class PriorIn(BaseModel):
+        """A rough pose known beforehand: a region for the object's centroid and/or a
+        rotation range [lo, hi] (radians, lo <= hi <= lo + 2 pi)."""
+
+        model_config = ConfigDict(extra="forbid", title="PriorIn")
+        region: RegionIn | None = None
+        theta: (
+            Annotated[
+                list[Annotated[float, Field(ge=-100.0, le=100.0, allow_inf_nan=False)]],
+                Field(min_length=2, max_length=2),
+            ]
+            | None
+        ) = None
+
     ObjectRef = Annotated[
         Annotated[t.Name, Tag("object-name")] | Annotated[ObjectIn, Tag("inline-object")],
         Discriminator(_object_or_name),
@@ -500,6 +534,12 @@ def _session_create(
         max_outliers: Annotated[int, Field(ge=0, le=settings.max_outliers)] = 0
         accuracy: AccuracyIn | None = Field(
             None, description="what `localized` requires; default fitted to the sensor"
+        )
+        prior: PriorIn | None = Field(
+            None,
+            description="what is known of the pose before touching (a fixture, a camera, "
+            "the previous part): no hypothesis outside it is considered, and the first "
+            "probe aims at its region",
         )
 
     return SessionCreate

@@ -14,7 +14,14 @@ from typing import Any
 
 from app.convert import strategy_config
 from app.errors import InvalidInputError
-from planner.codec import accuracy_from_dict, accuracy_to_dict, sensor_to_dict, workspace_to_dict
+from planner.codec import (
+    accuracy_from_dict,
+    accuracy_to_dict,
+    prior_from_dict,
+    prior_to_dict,
+    sensor_to_dict,
+    workspace_to_dict,
+)
 from planner.models.library import object_from_dict, object_to_dict
 from planner.types import ObjectModel, SensorBounds, Workspace
 
@@ -71,5 +78,8 @@ def session_config(body: Mapping[str, Any], models: Sequence[ObjectModel]) -> di
     accuracy = accuracy_from_dict(body.get("accuracy"))  # the planner's own checks
     if accuracy is not None:
         cfg["accuracy"] = accuracy_to_dict(accuracy)
+    prior = prior_from_dict(body.get("prior"))  # the planner's own checks
+    if prior is not None:
+        cfg["prior"] = prior_to_dict(prior)
     strategy_config(cfg)  # the planner's own checks
     return cfg

@@ -34,10 +34,10 @@ import numpy as np
 
 from hardware_sim.client import InProcessService, outline_distance, run_recognition
 from hardware_sim.presets import PRESETS, Preset, build_arm
-from hardware_sim.world import PLACEMENTS, random_world
+from hardware_sim.world import PLACEMENTS, World, random_world
 from planner.planning.config import STRATEGIES, StrategyConfig
 from planner.recognition.config import RecognitionConfig
-from planner.types import ObjectModel, Workspace
+from planner.types import ObjectModel, PosePrior, Workspace
 
 __all__ = ["ExperimentSpec", "TrialResult", "run_experiment", "run_trial"]
 
@@ -55,7 +55,10 @@ class ExperimentSpec:
     extra :class:`StrategyConfig` fields shared by all strategies (e.g.
     ``{"budget_ms": None, "budget_work": None}``); `pose_slack` (length) added to the hypothesis'
     error bound when judging the pose; `trial_timeout` (s of wall time, None: no
-    limit) ends a trial as status ``timeout`` (unlocalized, no steps kept)."""
+    limit) ends a trial as status ``timeout`` (unlocalized, no steps kept).
+    `prior_radius` (length) and `prior_theta` (radians, half-width) give each trial
+    a pose prior drawn around its world, the truth uniform inside it
+    (:func:`trial_prior`)."""
 
     models: tuple[ObjectModel, ...]
     strategies: tuple[str, ...]
@@ -70,6 +73,8 @@ class ExperimentSpec:
     trial_timeout: float | None = None
     placement: str = "anywhere"
     recognition: dict[str, Any] = field(default_factory=dict)
+    prior_radius: float | None = None
+    prior_theta: float | None = None
 
     def __post_init__(self) -> None:
         unknown = [s for s in self.strategies if s not in STRATEGIES]
@@ -82,6 +87,10 @@ class ExperimentSpec:
         if self.placement not in PLACEMENTS:
             raise ValueError(f"--placement must be one of {list(PLACEMENTS)}")
         RecognitionConfig(**self.recognition)  # refuses unknown or invalid settings
+        for name in ("prior_radius", "prior_theta"):
+            value = getattr(self, name)
+            if value is not None and not (math.isfinite(value) and value > 0):
+                raise ValueError(f"--{name.replace('_', '-')} must be a finite number > 0")
 
 
 @dataclass(frozen=True)
@@ -118,6 +127,29 @@ def _seed(spec: ExperimentSpec, trial: int, stream: int) -> np.random.SeedSequen
     return np.random.SeedSequence(spec.seed, spawn_key=(trial, stream))
 
 
+def trial_prior(
+    spec: ExperimentSpec, world: World, seed: np.random.SeedSequence
+) -> PosePrior | None:
+    """The pose prior of a trial (None without `prior_radius` and `prior_theta`): a
+    region of `prior_radius` whose centre lies uniformly within that distance of the
+    true centroid, and a rotation range of half-width `prior_theta` whose middle lies
+    uniformly within it of the true rotation: as a fixture or a camera would give."""
+    if spec.prior_radius is None and spec.prior_theta is None:
+        return None
+    rng = np.random.default_rng(seed)
+    center = radius = theta = None
+    if spec.prior_radius is not None:
+        stable = world.model.stable_poses[world.pose_index]
+        c = world.pose.apply(np.asarray(stable.centroid, dtype=float)[None])[0]
+        r, a = spec.prior_radius * math.sqrt(rng.random()), rng.uniform(-math.pi, math.pi)
+        center = (float(c[0] + r * math.cos(a)), float(c[1] + r * math.sin(a)))
+        radius = float(spec.prior_radius)
+    if spec.prior_theta is not None:
+        mid = world.pose.theta + rng.uniform(-spec.prior_theta, spec.prior_theta)
+        theta = (float(mid - spec.prior_theta), float(mid + spec.prior_theta))
+    return PosePrior(center, radius, theta)
+
+
 def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
     """Recognize the world of trial `trial` with `strategy` (deterministic given
     the spec, unless the planner's time budget binds)."""
@@ -132,7 +164,9 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
         spec.preset.bounds,
         spec.workspace,
         config,
-        RecognitionConfig(**spec.recognition),
+        RecognitionConfig(
+            **spec.recognition, prior=trial_prior(spec, world, _seed(spec, trial, 3))
+        ),
         rng=np.random.default_rng(_seed(spec, trial, 2)),
     )
     try:

@@ -34,6 +34,7 @@ from planner.types import (
     Contact,
     Hypothesis,
     Observation,
+    PosePrior,
     SensingPath,
     SensorBounds,
     Workspace,
@@ -55,6 +56,8 @@ __all__ = [
     "path_to_dict",
     "plan_to_dict",
     "planned_path_to_dict",
+    "prior_from_dict",
+    "prior_to_dict",
     "sensor_to_dict",
     "session_to_dict",
     "strategy_to_dict",
@@ -210,6 +213,7 @@ def session_to_dict(
         "hypothesis_count": len(hyps),
         "class_count": len({h.equivalence_class for h in hyps}),
         "accuracy": accuracy_to_dict(session.accuracy),
+        "prior": None if session.config.prior is None else prior_to_dict(session.config.prior),
         "localization": localization_to_dict(session.localization),
     }
 
@@ -224,6 +228,29 @@ def accuracy_from_dict(data: Mapping[str, Any] | None) -> Accuracy | None:
     if data is None:
         return None
     return Accuracy(float(data["translation"]), float(data["rotation"]))
+
+
+def prior_to_dict(prior: PosePrior) -> dict[str, Any]:
+    """``{"region": {"center", "radius"} | None, "theta": [lo, hi] | None}``."""
+    region = None
+    if prior.center is not None and prior.radius is not None:
+        region = {"center": _vec(prior.center), "radius": float(prior.radius)}
+    theta = None if prior.theta is None else [float(prior.theta[0]), float(prior.theta[1])]
+    return {"region": region, "theta": theta}
+
+
+def prior_from_dict(data: Mapping[str, Any] | None) -> PosePrior | None:
+    """The pose prior of its JSON form (None, or both parts null: none)."""
+    if data is None:
+        return None
+    region, theta = data.get("region"), data.get("theta")
+    if region is None and theta is None:
+        return None
+    return PosePrior(
+        None if region is None else tuple(region["center"]),
+        None if region is None else float(region["radius"]),
+        None if theta is None else (float(theta[0]), float(theta[1])),
+    )
 
 
 def localization_to_dict(loc: Localization) -> dict[str, Any]:

@@ -30,6 +30,7 @@ __all__ = [
     "ObjectModel",
     "Observation",
     "Pose",
+    "PosePrior",
     "SensingPath",
     "SensorBounds",
     "StablePose",
@@ -100,6 +101,48 @@ class SensorBounds:
                 raise InvalidObservationError("must be a finite number >= 0", field=name)
         if self.normal_error >= math.pi / 4:
             raise InvalidObservationError("must be below pi/4 radians", field="normal_error")
+
+
+@dataclass(frozen=True)
+class PosePrior:
+    """What is known of the pose before touching (a fixture, a camera, the previous
+    part): the object's area centroid lies within `radius` of `center` (world frame,
+    length unit), and its rotation within [theta_lo, theta_hi] (radians, counter-
+    clockwise; `theta_hi - theta_lo` at most 2 pi). Either part may be None. Inside
+    it every pose is as likely as before; outside it none is considered.
+
+    >>> PosePrior((0.0, 0.0), 10.0).admits_centroid(3.0, 4.0)
+    True
+    """
+
+    center: Vec2 | None = None
+    radius: float | None = None
+    theta: tuple[float, float] | None = None
+
+    def __post_init__(self) -> None:
+        if (self.center is None) != (self.radius is None):
+            raise InvalidObservationError(
+                "give the region's center and radius together", field="prior.region"
+            )
+        if self.center is not None:
+            object.__setattr__(self, "center", _finite_vec(self.center, "prior.region.center"))
+            if not (self.radius is not None and math.isfinite(self.radius) and self.radius > 0):
+                raise InvalidObservationError(
+                    "must be a finite number > 0", field="prior.region.radius"
+                )
+        if self.theta is not None:
+            lo, hi = (float(v) for v in self.theta)
+            if not (math.isfinite(lo) and math.isfinite(hi) and lo <= hi <= lo + 2 * math.pi):
+                raise InvalidObservationError(
+                    "must be [lo, hi] radians with lo <= hi <= lo + 2 pi", field="prior.theta"
+                )
+            object.__setattr__(self, "theta", (lo, hi))
+
+    def admits_centroid(self, x: float, y: float, slack: float = 0.0) -> bool:
+        """Is a centroid at (x, y) within the region (widened by `slack`)?"""
+        if self.center is None or self.radius is None:
+            return True
+        return math.hypot(x - self.center[0], y - self.center[1]) <= self.radius + slack
 
 
 @dataclass(frozen=True)

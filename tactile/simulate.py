@@ -73,6 +73,22 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
     )
     p.add_argument(
+        "--prior-radius",
+        type=float,
+        default=None,
+        metavar="R",
+        help="give each session a pose prior: a region of radius R (length) around a "
+        "point drawn within R of the true centroid, as a fixture or camera would",
+    )
+    p.add_argument(
+        "--prior-theta",
+        type=float,
+        default=None,
+        metavar="T",
+        help="and/or a rotation range of +-T degrees around an angle drawn within T of the "
+        "true rotation",
+    )
+    p.add_argument(
         "--thesis-choice",
         default="choose",
         choices=THESIS_CHOICES,
@@ -155,6 +171,8 @@ def cmd_simulate(args: argparse.Namespace) -> int:
             truth=args.truth,
             trial_timeout=getattr(args, "trial_timeout", None),
             placement=args.placement,
+            prior_radius=args.prior_radius,
+            prior_theta=None if args.prior_theta is None else math.radians(args.prior_theta),
             strategy=_strategy_settings(args),
             recognition=(
                 {}

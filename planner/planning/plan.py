@@ -128,8 +128,15 @@ def plan(
         if contacts:
             return finish("inconsistent", (), note="no hypothesis explains the contacts")
         missed = [o.path for o in observations]
+        prior = None if session is None else session.config.prior
         probe = opening_probe(
-            config, models_by_name(models), workspace, sensor_position, missed, gen
+            config,
+            models_by_name(models),
+            workspace,
+            sensor_position,
+            missed,
+            gen,
+            prior_center=None if prior is None else prior.center,
         )
         return finish("awaiting_contact", (probe,))
     classes = len({h.equivalence_class for h in hypotheses})

@@ -39,13 +39,18 @@ def opening_probe(
     sensor_position: Sequence[float],
     missed: Sequence[SensingPath],
     rng: np.random.Generator,
+    prior_center: Sequence[float] | None = None,
 ) -> PlannedPath:
     """Before any contact. The first probe runs from the sensor's place through the
     centre (``random``: from a random place, every time); after `missed` paths, the
-    chord most likely to meet the object (:func:`search_chord`)."""
+    chord most likely to meet the object (:func:`search_chord`). With a pose prior's
+    region, the first probe runs through its centre."""
     aim = (float(workspace.center[0]), float(workspace.center[1]))
     if config.name == "random":
         path = opening_path(workspace, sensor_position, angle=float(rng.uniform(-math.pi, math.pi)))
+    elif not missed and prior_center is not None:
+        path = opening_path(workspace, sensor_position, aim=prior_center)
+        aim = (float(prior_center[0]), float(prior_center[1]))
     elif not missed:
         path = opening_path(workspace, sensor_position)
     else:

@@ -98,9 +98,11 @@ def opening_path(
     sensor_position: Sequence[float],
     misses: int = 0,
     angle: float | None = None,
+    aim: Sequence[float] | None = None,
 ) -> SensingPath:
     """The probe when nothing is known: from the sensor's place on the safe circle
-    through the centre (a chord of length 2R).
+    through the centre (a chord of length 2R), or through `aim` (the centre of a
+    pose prior's region) to where it leaves the circle.
 
     After `misses` probes that touched nothing, the origin turns by the golden
     angle each time; `angle` (radians about the centre) overrides the origin.
@@ -115,6 +117,15 @@ def opening_path(
         angle = (math.atan2(rel[1], rel[0]) if np.any(rel) else 0.0) + misses * _GOLDEN_ANGLE
     unit = np.array([math.cos(angle), math.sin(angle)])
     origin = centre + workspace.radius * unit
+    if aim is not None and np.hypot(*(np.asarray(aim, dtype=float) - origin)) > 0:
+        # toward the aim, to where the line leaves the circle: t = -2 (o - c).d
+        d = np.asarray(aim, dtype=float) - origin
+        d = d / np.hypot(*d)
+        length = float(-2 * (origin - centre) @ d)
+        if length > 0:
+            return SensingPath(
+                (float(origin[0]), float(origin[1])), (float(d[0]), float(d[1])), length
+            )
     return SensingPath(
         (float(origin[0]), float(origin[1])),
         (float(-unit[0]), float(-unit[1])),

@@ -6,12 +6,16 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Literal
 
+from planner.types import PosePrior
+
 __all__ = ["RecognitionConfig"]
 
 
 @dataclass(frozen=True)
 class RecognitionConfig:
-    """Knobs of recognition; the defaults follow DESIGN §4."""
+    """Knobs of recognition; the defaults follow DESIGN §4. `prior`: where the object
+    is known to lie (:class:`~planner.types.PosePrior`; None: anywhere in the safe
+    circle)."""
 
     max_outliers: int = 0
     outlier_probability: float = 0.05
@@ -21,6 +25,7 @@ class RecognitionConfig:
     max_family_samples: int = 16
     require_inside_workspace: bool = True
     normal_z_error: float = 0.1
+    prior: PosePrior | None = None
 
     def __post_init__(self) -> None:
         if self.max_outliers < 0:

@@ -19,10 +19,11 @@ of its own:
 from __future__ import annotations
 
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
-from planner.geometry import LENGTH_SLACK
+from planner.geometry import LENGTH_SLACK, wrap_angle
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import free_space_check, inside_workspace, model_check
 from planner.recognition.poses import (
@@ -34,7 +35,7 @@ from planner.recognition.poses import (
 )
 from planner.recognition.tree import Group
 from planner.recognition.weights import residual_fitness, weights
-from planner.types import Observation, SensorBounds, Workspace
+from planner.types import Observation, PosePrior, SensorBounds, StablePose, Workspace
 
 __all__ = ["PoseSamples", "evaluate"]
 
@@ -59,6 +60,28 @@ def _no_samples(group_index: int) -> PoseSamples:
     return PoseSamples(
         group_index, np.zeros(0, np.int64), none, np.zeros((0, 2)), none, none, none, none, none
     )
+
+
+def within_prior(
+    prior: PosePrior, stable: StablePose, theta: np.ndarray, t: np.ndarray, bound: Any, slack: float
+) -> np.ndarray:
+    """(N,) bool: can each pose (theta (N,), t (N, 2)) be the true one under `prior`?
+    Sound: a pose is dropped only when its whole error bound lies outside the prior."""
+    ok = np.ones(len(theta), dtype=bool)
+    d_t, d_theta = np.asarray(bound.d_translation), np.asarray(bound.d_theta)
+    if prior.center is not None and prior.radius is not None:
+        # centroid c = R(theta) c_model + t, uncertain by d_t + d_theta |c_model|
+        c = np.asarray(stable.centroid, dtype=float)
+        cos, sin = np.cos(theta), np.sin(theta)
+        cx = cos * c[0] - sin * c[1] + t[:, 0]
+        cy = sin * c[0] + cos * c[1] + t[:, 1]
+        reach = prior.radius + d_t + d_theta * float(np.hypot(*c)) + slack
+        ok &= np.hypot(cx - prior.center[0], cy - prior.center[1]) <= reach
+    if prior.theta is not None:
+        lo, hi = prior.theta
+        mid, half = (lo + hi) / 2, (hi - lo) / 2
+        ok &= np.abs(wrap_angle(theta - mid)) <= half + d_theta + 1e-12
+    return ok
 
 
 def evaluate(
@@ -115,6 +138,8 @@ def evaluate(
     )
     if config.require_inside_workspace:
         ok &= inside_workspace(stable.outline, theta, t, eps_t, workspace, slack)
+    if config.prior is not None:
+        ok &= within_prior(config.prior, stable, theta, t, bound, slack)
     ok = free_space_check(group, observations, a_src, theta, t, eps_t, ok, eps_d, slack)
 
     fitness = residual_fitness(

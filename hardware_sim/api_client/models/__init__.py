@@ -27,7 +27,11 @@ from .plan_out_stopped_by_type_0 import PlanOutStoppedByType0
 from .planned_path_out import PlannedPathOut
 from .planned_path_out_scored_by import PlannedPathOutScoredBy
 from .pose_out import PoseOut
+from .prior_in import PriorIn
+from .prior_out import PriorOut
 from .problem import Problem
+from .region_in import RegionIn
+from .region_out import RegionOut
 from .report_bound_out import ReportBoundOut
 from .report_contact_out import ReportContactOut
 from .report_out import ReportOut
@@ -77,7 +81,11 @@ __all__ = (
     "PlanOutStatus",
     "PlanOutStoppedByType0",
     "PoseOut",
+    "PriorIn",
+    "PriorOut",
     "Problem",
+    "RegionIn",
+    "RegionOut",
     "ReportBoundOut",
     "ReportContactOut",
     "ReportOut",

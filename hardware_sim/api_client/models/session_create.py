@@ -14,6 +14,7 @@ from typing import cast
 if TYPE_CHECKING:
   from ..models.accuracy_in import AccuracyIn
   from ..models.object_in import ObjectIn
+  from ..models.prior_in import PriorIn
   from ..models.sensor_in import SensorIn
   from ..models.strategy_in import StrategyIn
   from ..models.workspace_in import WorkspaceIn
@@ -35,6 +36,8 @@ class SessionCreate:
             objects (list[ObjectIn | str]):
             accuracy (AccuracyIn | None | Unset): what `localized` requires; default fitted to the sensor
             max_outliers (int | Unset):  Default: 0.
+            prior (None | PriorIn | Unset): what is known of the pose before touching (a fixture, a camera, the previous
+                part): no hypothesis outside it is considered, and the first probe aims at its region
             sensor (SensorIn | Unset): Bounded sensor errors: contact position (length) and normal angle (radians).
             sensor_position (list[float] | None | Unset): default: the point of the safe circle on its +x axis
             strategy (StrategyIn | Unset):
@@ -44,6 +47,7 @@ class SessionCreate:
     objects: list[ObjectIn | str]
     accuracy: AccuracyIn | None | Unset = UNSET
     max_outliers: int | Unset = 0
+    prior: None | PriorIn | Unset = UNSET
     sensor: SensorIn | Unset = UNSET
     sensor_position: list[float] | None | Unset = UNSET
     strategy: StrategyIn | Unset = UNSET
@@ -56,6 +60,7 @@ class SessionCreate:
     def to_dict(self) -> dict[str, Any]:
         from ..models.accuracy_in import AccuracyIn # noqa: PLC0415
         from ..models.object_in import ObjectIn # noqa: PLC0415
+        from ..models.prior_in import PriorIn # noqa: PLC0415
         from ..models.sensor_in import SensorIn # noqa: PLC0415
         from ..models.strategy_in import StrategyIn # noqa: PLC0415
         from ..models.workspace_in import WorkspaceIn # noqa: PLC0415
@@ -79,6 +84,14 @@ class SessionCreate:
             accuracy = self.accuracy
 
         max_outliers = self.max_outliers
+
+        prior: dict[str, Any] | None | Unset
+        if isinstance(self.prior, Unset):
+            prior = UNSET
+        elif isinstance(self.prior, PriorIn):
+            prior = self.prior.to_dict()
+        else:
+            prior = self.prior
 
         sensor: dict[str, Any] | Unset = UNSET
         if not isinstance(self.sensor, Unset):
@@ -112,6 +125,8 @@ class SessionCreate:
             field_dict["accuracy"] = accuracy
         if max_outliers is not UNSET:
             field_dict["max_outliers"] = max_outliers
+        if prior is not UNSET:
+            field_dict["prior"] = prior
         if sensor is not UNSET:
             field_dict["sensor"] = sensor
         if sensor_position is not UNSET:
@@ -129,6 +144,7 @@ class SessionCreate:
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
         from ..models.accuracy_in import AccuracyIn # noqa: PLC0415
         from ..models.object_in import ObjectIn # noqa: PLC0415
+        from ..models.prior_in import PriorIn # noqa: PLC0415
         from ..models.sensor_in import SensorIn # noqa: PLC0415
         from ..models.strategy_in import StrategyIn # noqa: PLC0415
         from ..models.workspace_in import WorkspaceIn # noqa: PLC0415
@@ -175,6 +191,26 @@ class SessionCreate:
 
 
         max_outliers = d.pop("max_outliers", UNSET)
+
+        def _parse_prior(data: object) -> None | PriorIn | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, dict):
+                    raise TypeError()
+                prior_type_0 = PriorIn.from_dict(data)
+
+
+
+                return prior_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(None | PriorIn | Unset, data)
+
+        prior = _parse_prior(d.pop("prior", UNSET))
+
 
         _sensor = d.pop("sensor", UNSET)
         sensor: SensorIn | Unset
@@ -228,6 +264,7 @@ class SessionCreate:
             objects=objects,
             accuracy=accuracy,
             max_outliers=max_outliers,
+            prior=prior,
             sensor=sensor,
             sensor_position=sensor_position,
             strategy=strategy,

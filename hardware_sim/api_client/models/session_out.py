@@ -9,6 +9,7 @@ from attrs import field as _attrs_field
 from ..types import UNSET, Unset
 
 from ..models.session_out_status import SessionOutStatus
+from ..types import UNSET, Unset
 from typing import cast
 
 if TYPE_CHECKING:
@@ -16,6 +17,7 @@ if TYPE_CHECKING:
   from ..models.hypothesis_out import HypothesisOut
   from ..models.localization_out import LocalizationOut
   from ..models.observation_out import ObservationOut
+  from ..models.prior_out import PriorOut
   from ..models.sensor_out import SensorOut
   from ..models.strategy_out import StrategyOut
   from ..models.workspace_out import WorkspaceOut
@@ -50,6 +52,7 @@ class SessionOut:
             strategy (StrategyOut):
             version (int):
             workspace (WorkspaceOut):
+            prior (None | PriorOut | Unset):
      """
 
     accuracy: AccuracyOut
@@ -67,6 +70,7 @@ class SessionOut:
     strategy: StrategyOut
     version: int
     workspace: WorkspaceOut
+    prior: None | PriorOut | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -78,6 +82,7 @@ class SessionOut:
         from ..models.hypothesis_out import HypothesisOut # noqa: PLC0415
         from ..models.localization_out import LocalizationOut # noqa: PLC0415
         from ..models.observation_out import ObservationOut # noqa: PLC0415
+        from ..models.prior_out import PriorOut # noqa: PLC0415
         from ..models.sensor_out import SensorOut # noqa: PLC0415
         from ..models.strategy_out import StrategyOut # noqa: PLC0415
         from ..models.workspace_out import WorkspaceOut # noqa: PLC0415
@@ -125,6 +130,14 @@ class SessionOut:
 
         workspace = self.workspace.to_dict()
 
+        prior: dict[str, Any] | None | Unset
+        if isinstance(self.prior, Unset):
+            prior = UNSET
+        elif isinstance(self.prior, PriorOut):
+            prior = self.prior.to_dict()
+        else:
+            prior = self.prior
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -145,6 +158,8 @@ class SessionOut:
             "version": version,
             "workspace": workspace,
         })
+        if prior is not UNSET:
+            field_dict["prior"] = prior
 
         return field_dict
 
@@ -156,6 +171,7 @@ class SessionOut:
         from ..models.hypothesis_out import HypothesisOut # noqa: PLC0415
         from ..models.localization_out import LocalizationOut # noqa: PLC0415
         from ..models.observation_out import ObservationOut # noqa: PLC0415
+        from ..models.prior_out import PriorOut # noqa: PLC0415
         from ..models.sensor_out import SensorOut # noqa: PLC0415
         from ..models.strategy_out import StrategyOut # noqa: PLC0415
         from ..models.workspace_out import WorkspaceOut # noqa: PLC0415
@@ -226,6 +242,26 @@ class SessionOut:
 
 
 
+        def _parse_prior(data: object) -> None | PriorOut | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, dict):
+                    raise TypeError()
+                prior_type_0 = PriorOut.from_dict(data)
+
+
+
+                return prior_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(None | PriorOut | Unset, data)
+
+        prior = _parse_prior(d.pop("prior", UNSET))
+
+
         session_out = cls(
             accuracy=accuracy,
             class_count=class_count,
@@ -242,6 +278,7 @@ class SessionOut:
             strategy=strategy,
             version=version,
             workspace=workspace,
+            prior=prior,
         )
 
 
