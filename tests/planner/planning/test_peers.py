@@ -8,7 +8,6 @@ import math
 import numpy as np
 import pytest
 from hypothesis import given, settings
-from hypothesis import strategies as st
 
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.budget import Budget
@@ -27,19 +26,8 @@ from tests.planner.planning.test_strategies import (
     SENSOR,
     WORKSPACE,
     fig71_dilemma,
+    tables,
 )
-
-
-@st.composite
-def outcome_tables(draw):
-    """Small random survivor tables: K classes, C paths, unequal weights."""
-    k = draw(st.integers(2, 6))
-    c = draw(st.integers(1, 6))
-    bits = draw(st.lists(st.booleans(), min_size=c * k * k, max_size=c * k * k))
-    conf = np.array(bits).reshape(c, k, k)
-    conf = conf | conf.transpose(0, 2, 1)
-    weight = np.array(draw(st.lists(st.floats(0.01, 1.0), min_size=k, max_size=k)))
-    return SurvivorTable.from_matrix(conf, weight)
 
 
 def brute_edge_cut(table: SurvivorTable, path: int) -> float:
@@ -65,8 +53,9 @@ def brute_information_gain(table: SurvivorTable, path: int) -> float:
 
 
 @settings(max_examples=200, deadline=None)
-@given(outcome_tables())
-def test_edge_cut_equals_brute_force_and_ec2_takes_its_maximum(table):
+@given(tables())
+def test_edge_cut_equals_brute_force_and_ec2_takes_its_maximum(drawn):
+    table, _ = drawn
     brute = np.array([brute_edge_cut(table, c) for c in range(table.n_paths)])
     np.testing.assert_allclose(edge_cut(table), brute, atol=1e-12)
     ranking = rank_candidates(table, StrategyConfig(name="ec2", budget_work=None, budget_ms=None))
@@ -75,8 +64,9 @@ def test_edge_cut_equals_brute_force_and_ec2_takes_its_maximum(table):
 
 
 @settings(max_examples=200, deadline=None)
-@given(outcome_tables())
-def test_information_gain_equals_brute_force_and_infogain_takes_its_maximum(table):
+@given(tables())
+def test_information_gain_equals_brute_force_and_infogain_takes_its_maximum(drawn):
+    table, _ = drawn
     brute = np.array([brute_information_gain(table, c) for c in range(table.n_paths)])
     np.testing.assert_allclose(information_gain(table), brute, atol=1e-9)
     ranking = rank_candidates(
