@@ -14,13 +14,13 @@ from __future__ import annotations
 import hashlib
 import json
 import uuid
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from typing import Any
 
 import numpy as np
 import pydantic_core
 
-from app.store_types import SessionRecord
+from app.store_types import SessionRecord, Snapshot
 from planner.codec import (
     accuracy_from_dict,
     observation_from_dict,
@@ -34,6 +34,7 @@ from planner.planning.config import DEFAULT_WORK, StrategyConfig
 from planner.planning.result import Plan
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
+from planner.recognition.snapshot import code_version, restore, snapshot
 from planner.types import SensorBounds, Workspace
 
 __all__ = [
@@ -44,8 +45,10 @@ __all__ = [
     "extends",
     "fingerprint",
     "if_match_ok",
+    "next_state",
     "plan_json",
     "plan_rng",
+    "resume",
     "session_json",
     "strategy_config",
     "to_json",
@@ -153,3 +156,27 @@ def session_json(
 def plan_json(result: Plan, version: int, limit: int | None) -> bytes:
     """The plan answer's bytes (:func:`planner.codec.plan_to_dict`)."""
     return to_json(plan_to_dict(result, version, limit))
+
+
+def next_state(
+    record: SessionRecord,
+    current: Session,
+    step: Callable[[SessionRecord, Session], Session],
+    limit: int | None,
+    keep: bool,
+) -> tuple[Session, bytes, Snapshot | None]:
+    """The session after `step`, derived, its JSON at the next version and, when it
+    is to be kept (`keep`), its snapshot (in a thread)."""
+    new = derive(step(record, current))
+    body = session_json(record.id, record.version + 1, record.config, new, limit)
+    return new, body, Snapshot(code_version(), snapshot(new)) if keep else None
+
+
+def resume(base: Session | None, stored: bytes | None, record: SessionRecord) -> Session:
+    """The record's derived session from a stored snapshot newer than the in-memory
+    base (when it was written by this code and its observations begin the
+    record's), else from the base, extended by the rest."""
+    restored = restore(stored) if stored is not None else None
+    if restored is not None and extends(restored, record):
+        base = restored
+    return derive(catch_up(base, record))

@@ -13,7 +13,7 @@ from typing import Annotated, Any
 from fastapi import Depends, Header, Path, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from app.errors import UnauthorizedError
+from app.errors import InvalidInputError, UnauthorizedError
 from app.service import SessionService
 from app.settings import Settings
 
@@ -24,6 +24,7 @@ __all__ = [
     "SessionId",
     "SettingsDep",
     "auth_dependencies",
+    "reject_unknown_query",
     "require_api_key",
 ]
 
@@ -87,3 +88,25 @@ IdempotencyKey = Annotated[
         description="replays the first answer to a retried request (other body: 422)",
     ),
 ]
+
+
+async def reject_unknown_query(request: Request) -> None:
+    """422 naming a query parameter the operation does not take: a misspelt ``limt=3``
+    silently ignored would answer something the client did not ask for."""
+    route = request.scope.get("route")
+    dependant = getattr(route, "dependant", None)
+    if dependant is None or not request.query_params:
+        return
+    known: set[str] = set()
+    todo = [dependant]
+    while todo:  # the operation's own parameters and those of its dependencies
+        d = todo.pop()
+        known.update(p.alias for p in d.query_params)
+        todo.extend(d.dependencies)
+    unknown = sorted(set(request.query_params) - known)
+    if unknown:
+        raise InvalidInputError(
+            f"unknown query parameter {unknown[0]!r}; this operation takes "
+            f"{sorted(known) or 'none'}",
+            field=unknown[0],
+        )

@@ -16,10 +16,11 @@ from typing import Any
 
 import anyio
 import structlog
-from fastapi import FastAPI
+from fastapi import Depends, FastAPI
 from fastapi.routing import APIRoute
 
 from app import migrations
+from app.deps import reject_unknown_query
 from app.errors import PROBLEM_MEDIA_TYPE, install_error_handlers
 from app.observability import (
     BodyLimitMiddleware,
@@ -133,6 +134,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         ),
         lifespan=lifespan,
         generate_unique_id_function=operation_id,
+        dependencies=[Depends(reject_unknown_query)],
     )
     app.state.settings = settings
     app.state.service = None

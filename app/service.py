@@ -32,13 +32,14 @@ import anyio.to_thread
 from app.cache import LRU, KeyedLocks
 from app.convert import (
     build_session,
-    catch_up,
     derive,
     etag,
     extends,
     if_match_ok,
+    next_state,
     plan_json,
     plan_rng,
+    resume,
     session_json,
     strategy_config,
     to_json,
@@ -69,7 +70,7 @@ from planner.models.library import object_from_dict, object_to_dict
 from planner.planning.plan import plan_session
 from planner.planning.result import Plan
 from planner.recognition.session import Session
-from planner.recognition.snapshot import code_version, restore, snapshot
+from planner.recognition.snapshot import code_version
 
 __all__ = ["Answer", "SessionService"]
 
@@ -86,30 +87,6 @@ class Answer:
     body: bytes
     headers: dict[str, str]
     replayed: bool = False
-
-
-def _next_state(
-    record: SessionRecord,
-    current: Session,
-    step: Callable[[SessionRecord, Session], Session],
-    limit: int | None,
-    keep: bool,
-) -> tuple[Session, bytes, Snapshot | None]:
-    """The session after `step`, derived, its JSON at the next version and, when it
-    is to be kept (`keep`), its snapshot (in a thread)."""
-    new = derive(step(record, current))
-    body = session_json(record.id, record.version + 1, record.config, new, limit)
-    return new, body, Snapshot(code_version(), snapshot(new)) if keep else None
-
-
-def _resume(base: Session | None, stored: bytes | None, record: SessionRecord) -> Session:
-    """The record's derived session from a stored snapshot newer than the in-memory
-    base (when it was written by this code and its observations begin the
-    record's), else from the base, extended by the rest."""
-    restored = restore(stored) if stored is not None else None
-    if restored is not None and extends(restored, record):
-        base = restored
-    return derive(catch_up(base, record))
 
 
 class SessionService:
@@ -200,7 +177,7 @@ class SessionService:
                 found = await self.run_db(self.store.get_snapshot, record.id, code_version(), n)
                 if found is not None and (base is None or found[0] > len(base.observations)):
                     stored = found[1]
-            session = await self.run_cpu(_resume, base, stored, record)
+            session = await self.run_cpu(resume, base, stored, record)
             self.sessions.put(key, session)
         return session
 
@@ -313,7 +290,7 @@ class SessionService:
                     current = await self._session(record)
                     version = record.version + 1
                     new, body, snap = await self.run_cpu(
-                        _next_state, record, current, step, limit, keep
+                        next_state, record, current, step, limit, keep
                     )
                     answer = Answer(status, body, {"ETag": etag(version)})
                     idem = self._idem(scope, idem_key, fp, answer)

@@ -5,9 +5,10 @@ from typing import Annotated, Literal
 
 from fastapi import APIRouter, Query, Response
 
+from app.answers import ReportOut
 from app.deps import ServiceDep, SessionId, auth_dependencies
 from app.routes import PROBLEMS, respond
-from app.schemas import InputModels, ReportOut
+from app.schemas import InputModels
 from app.settings import Settings
 
 __all__ = ["build_router"]

@@ -4,10 +4,11 @@ from typing import Annotated
 
 from fastapi import APIRouter, Query
 
+from app.answers import PlanOut
 from app.deps import ServiceDep, SessionId, auth_dependencies
 from app.errors import InvalidInputError
 from app.routes import PROBLEMS, respond
-from app.schemas import InputModels, PlanOut
+from app.schemas import InputModels
 from app.settings import Settings
 
 __all__ = ["build_router"]

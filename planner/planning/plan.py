@@ -127,17 +127,7 @@ def plan(
     if not hypotheses:
         if contacts:
             return finish("inconsistent", (), note="no hypothesis explains the contacts")
-        missed = [o.path for o in observations]
-        prior = None if session is None else session.config.prior
-        probe = opening_probe(
-            config,
-            models_by_name(models),
-            workspace,
-            sensor_position,
-            missed,
-            gen,
-            prior_center=None if prior is None else prior.center,
-        )
+        probe = _opening(config, models, workspace, sensor_position, observations, gen, session)
         return finish("awaiting_contact", (probe,))
     classes = len({h.equivalence_class for h in hypotheses})
     if classes == 1 and localized is not False:
@@ -186,6 +176,25 @@ def plan(
         note=note,
         candidates=len(found.candidates),
         classes=found.table.n_classes,
+    )
+
+
+def _opening(
+    config: StrategyConfig,
+    models: Sequence[ObjectModel],
+    workspace: Workspace,
+    sensor_position: Sequence[float],
+    observations: Sequence[Observation],
+    rng: np.random.Generator,
+    session: Session | None,
+) -> PlannedPath:
+    """The probe before any contact, through the centre of the session's pose prior
+    region when it has one (:func:`~planner.planning.probes.opening_probe`)."""
+    prior = None if session is None else session.config.prior
+    missed = [o.path for o in observations]
+    aim = None if prior is None else prior.center
+    return opening_probe(
+        config, models_by_name(models), workspace, sensor_position, missed, rng, aim
     )
 
 

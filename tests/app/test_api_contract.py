@@ -8,7 +8,8 @@ import uuid
 import pytest
 from fastapi import FastAPI
 
-from app.schemas import HypothesisOut, PlanOut, SessionOut
+from app.answers import PlanOut
+from app.schemas import HypothesisOut, SessionOut
 from app.settings import Settings
 from tests.app.api_support import (
     BOTTOM,

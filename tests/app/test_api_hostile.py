@@ -236,3 +236,21 @@ def test_any_name_is_registered_located_and_drawn(hostile, name):
     assert client.delete(location).status_code == 204
     assert is_problem(client.get(location), 404) and is_problem(client.delete(location), 404)
     assert client.get(f"/v1/sessions/{sid}").json()["objects"] == [name]
+
+
+@pytest.mark.parametrize(
+    "path",
+    [
+        "/v1/sessions/{session}/plan?limt=3",
+        "/v1/sessions/{session}/image.png?dpi=50&colour=red",
+        "/v1/sessions/{session}?verbose=1",
+        "/v1/objects?pge=2",
+    ],
+)
+def test_an_unknown_query_parameter_is_a_422_naming_it(hostile, path):
+    client, sid = hostile
+    r = client.get(path.format(session=sid))
+    assert is_problem(r, 422)
+    name = path.split("?")[1].split("&")[-1].split("=")[0]
+    assert r.json()["errors"][0]["field"] == name
+    _healthy(client, sid)

@@ -10,7 +10,7 @@ import math
 import jsonschema
 import pytest
 
-from app.schemas import ReportOut
+from app.answers import ReportOut
 from tests.app.api_support import BOTTOM, RIGHT, SENSOR, api, create_session, is_problem, miss
 
 
