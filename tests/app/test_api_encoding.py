@@ -11,8 +11,9 @@ import pytest
 from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
+from app.answers import PlanOut
 from app.convert import plan_json, session_json
-from app.schemas import PlanOut, SessionOut
+from app.schemas import SessionOut
 from app.viewer import mii_json
 from hardware_sim.world import random_world
 from planner.codec import observation_from_dict, observation_to_dict, plan_to_dict, session_to_dict
