@@ -213,8 +213,8 @@ def session_to_dict(
         "hypothesis_count": len(hyps),
         "class_count": len({h.equivalence_class for h in hyps}),
         "accuracy": accuracy_to_dict(session.accuracy),
-        "prior": None if session.config.prior is None else prior_to_dict(session.config.prior),
         "localization": localization_to_dict(session.localization),
+        "prior": None if session.config.prior is None else prior_to_dict(session.config.prior),
     }
 
 
