@@ -49,6 +49,7 @@ from planner.geometry import rotation_matrices
 from planner.types import StablePose
 
 __all__ = [
+    "BRUTE_FORCE_FACES",
     "CHUNK_ELEMENTS",
     "MAX_TREE_POINTS",
     "SUPPORT_DIRECTIONS",
@@ -64,6 +65,8 @@ __all__ = [
 SYMMETRY_FLOOR = 1e-6
 #: The most point x face pairs one pass of the outline distance holds at once.
 CHUNK_ELEMENTS = 1_000_000
+#: Outlines with at most this many faces are compared point by face, without a tree.
+BRUTE_FORCE_FACES = 64
 #: The most points one stable pose's k-d tree holds along its faces.
 MAX_TREE_POINTS = 20_000
 #: Points measured inside each face, besides its ends.
@@ -221,6 +224,11 @@ def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float)
     out = np.zeros(len(rows), dtype=bool)
     if not math.isfinite(limit) or limit < 0:
         return out if limit < 0 else np.ones(len(rows), dtype=bool)
+    faces = max(a.starts.shape[1], b.starts.shape[1])
+    if faces <= BRUTE_FORCE_FACES or b.tree(limit / 2)[1] > limit or a.tree(limit / 2)[1] > limit:
+        # few faces: measuring every point against every face is cheaper than a tree;
+        # a tree coarser than the threshold would leave nearly every point to measure
+        return outline_distance(a, i, b, rows) <= limit
     step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
     for lo in range(0, len(rows), step):
         part = rows[lo : lo + step]
