@@ -78,7 +78,7 @@ def test_a_worker_that_missed_versions_extends_what_it_has(tmp_path, monkeypatch
         rebuilt = []
         real = app.convert.build_session
         monkeypatch.setattr(
-            "app.service.catch_up",
+            "app.convert.catch_up",
             lambda base, record: rebuilt.append(base is None) or catch_up(base, record),
         )
         monkeypatch.setattr("app.convert.build_session", lambda r: rebuilt.append(r) or real(r))
