@@ -184,17 +184,12 @@ def _point_faces(q: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndar
     out = np.zeros(len(q))
     step = max(1, CHUNK_ELEMENTS // max(1, len(starts)))
     for lo in range(0, len(q), step):
-        out[lo : lo + step] = _nearest_face(q[lo : lo + step], starts, ends)
+        part = q[lo : lo + step, None, :]  # each point a set of one
+        shape = (len(part), *starts.shape)
+        out[lo : lo + step] = _to_faces(
+            part, np.broadcast_to(starts, shape), np.broadcast_to(ends, shape)
+        )
     return out
-
-
-def _nearest_face(q: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    p = q[:, None, :]
-    e = ends - starts
-    sq = np.maximum(np.einsum("fi,fi->f", e, e), 1e-300)
-    u = np.clip(np.einsum("kfi,fi->kf", p - starts, e) / sq, 0.0, 1.0)
-    gap = p - (starts + u[..., None] * e)
-    return np.sqrt(np.einsum("kfi,kfi->kf", gap, gap).min(axis=1))
 
 
 def _all_within(
