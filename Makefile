@@ -30,7 +30,9 @@ lint: $(VENV)/.installed-dev
 	$(BIN)/ruff format --check .
 
 test: lint
-	$(BIN)/python -m pytest -q
+	$(BIN)/python -m pytest -q -n auto --dist worksteal --ignore=tests/app/test_api_fuzz.py
+	# schemathesis names every operation's test alike, which parallel workers would run once
+	$(BIN)/python -m pytest -q tests/app/test_api_fuzz.py
 
 # Regenerate the committed HTTP client from the service's OpenAPI schema.
 client: $(VENV)/.installed-dev
