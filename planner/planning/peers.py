@@ -54,13 +54,15 @@ def entropy(weight: np.ndarray) -> float:
     return float(-(p * np.log(p)).sum())
 
 
-def information_gain(table: SurvivorTable) -> np.ndarray:
+def information_gain(table: SurvivorTable, weight: np.ndarray | None = None) -> np.ndarray:
     """(C,) expected entropy reduction (nats) of the class distribution by each path.
 
     IG(P) = H(w) - sum_k w_k H(w | S_P(k)), with
-    H(w | S) = log w(S) - sum_{j in S} w_j log w_j / w(S).
+    H(w | S) = log w(S) - sum_{j in S} w_j log w_j / w(S); `weight` replaces the
+    table's class weights (zero outside a state).
     """
-    w = table.weight
+    w = table.weight if weight is None else np.asarray(weight, dtype=float)
+    w = w / w.sum() if w.sum() > 0 else w
     w_log_w = np.where(w > 0, w * np.log(np.where(w > 0, w, 1.0)), 0.0)
     mass = weighted_count(table.bits, w)
     left = np.log(np.maximum(mass, 1e-300)) - weighted_count(table.bits, w_log_w) / np.maximum(

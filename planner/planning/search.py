@@ -19,7 +19,11 @@ Paths with w_stay = 1 (uninformative on S) are never taken.
 
 Depth-limited search evaluates this recursion `depth` touches deep; a leaf
 state that is not settled counts one more touch, which is admissible: a state
-that some path can split needs at least one touch. The same bound orders and
+that some path can split needs at least one touch. With ``leaf="entropy"`` (the
+``lookahead`` strategy's) it counts ``max(1, log |T| / rate)`` instead, `rate` the
+most information (nats) one path gives at the root: with many classes two
+touches deep nearly every outcome is still open at the horizon, and one touch
+each would value paths alike however much they leave. The same bound orders and
 prunes the paths at every node (branch and bound), and values are memoized on
 (state bitset, depth); values known to be exact (depth >= classes - 1, or no
 depth limit) are shared between depths. Without a depth limit the search is
@@ -45,9 +49,13 @@ import numpy as np
 
 from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, unpack_bits
 from planner.planning.budget import Budget, OutOfBudgetError
+from planner.planning.peers import information_gain
 from planner.planning.search_nodes import Node, SearchSpace
 
-__all__ = ["SearchResult", "expected_remaining", "state_value"]
+__all__ = ["LEAVES", "SearchResult", "expected_remaining", "information_rate", "state_value"]
+
+#: How an open set at the search's horizon is valued (see the module's text).
+LEAVES = ("touch", "entropy")
 
 #: Children of one path evaluated together one touch deep, and the most words
 #: (paths x members x words) one batch of them may take; children of root paths
@@ -78,8 +86,9 @@ class _Search:
     on the state (`exact`) and on (state, depth) (`limited`), stopped by
     `budget`."""
 
-    def __init__(self, table: SurvivorTable, budget: Budget) -> None:
-        self.space = SearchSpace(table)
+    def __init__(self, table: SurvivorTable, budget: Budget, rate: float | None = None) -> None:
+        self.space = SearchSpace(table, rate)
+        self.table = table
         self.n = table.n_classes
         self.budget = budget
         self.exact: dict[bytes, float] = {}
@@ -99,10 +108,9 @@ class _Search:
             self.exact[key] = 0.0
             return 0.0
         if depth == 0:
-            return 1.0  # admissible leaf bound: S can be split, so at least one touch
+            return float(self.space.leaf_value(len(idx)))  # S can be split: >= 1 touch
         if depth == 1:
-            # children are leaves worth 0 or 1: exact
-            best = float(self.space.expand(state, idx, self.space.leaf).bound.min())
+            best = float(self.space.expand(state, idx, self.space.leaf).one_deep.min())
         else:
             # E(S) = 1 + min_P sum_h w(h|S) E(S_P(h) & S), paths in order of their bound
             node = self.space.expand(state, idx)
@@ -211,8 +219,8 @@ class _Search:
             value[paths], exact[paths] = 0.0, True
             return SearchResult(value, exact, False, self.space.states)
         if depth == 1:
-            # E_P(S) one touch deep is the bound itself: only the paths asked for
-            value[paths] = self.space.expand(state, idx, paths).bound
+            # E_P(S) one touch deep: only the paths asked for
+            value[paths] = self.space.expand(state, idx, paths).one_deep
             exact[paths] = True
             return SearchResult(value, exact, False, self.space.states)
         node = self.space.expand(state, idx)
@@ -221,7 +229,10 @@ class _Search:
         exact[uninformative] = True
         child_depth = None if depth is None else depth - 1
         live = paths[np.isfinite(node.bound[paths])]
-        order = live[np.argsort(node.bound[live] + extra[live], kind="stable")]
+        # the most informative first, then by bound: when the budget stops the search,
+        # those are the paths with exact values (bounds of many classes lie close)
+        gain = information_gain(self.table, self.table.weight * unpack_bits(state, self.n))
+        order = live[np.lexsort((node.bound[live] + extra[live], -gain[live]))]
         if child_depth == 1:
             truncated = self._rank_two(node, order, top_k, extra, value, exact)
             return SearchResult(value, exact, truncated, self.space.states)
@@ -230,7 +241,7 @@ class _Search:
         for c in order:
             threshold = _kth_best(best, top_k)
             if _reaches(node.bound[c] + extra[c], threshold):
-                break
+                continue
             try:
                 v, done = self.path_value(node, int(c), child_depth, threshold - extra[c])
             except OutOfBudgetError:
@@ -254,22 +265,24 @@ class _Search:
         """Root paths two touches deep, in `order`, a group at a time: all children
         of a group are valued one touch deep together. (Branch and bound would value
         nearly all of them anyway: counting one touch per child the bounds of paths
-        with close values prune little.) Stops at the first path whose bound reaches
-        the top_k-th exact objective; fills `value` and `exact` of the paths done and
-        returns whether the budget stopped it."""
+        with close values prune little.) Skips the paths whose bound reaches the
+        top_k-th exact objective found so far; fills `value` and `exact` of the paths
+        done and returns whether the budget stopped it."""
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
         while lo < len(order):
             threshold = _kth_best(best, top_k)
-            hi, children = lo, 0
-            while hi < len(order) and (hi == lo or children < _GROUP):
-                if _reaches(node.bound[order[hi]] + extra[order[hi]], threshold):
-                    break
-                children += int(node.open[order[hi]].sum())
-                hi += 1
-            if hi == lo:
+            picked: list[int] = []
+            children = 0
+            while lo < len(order) and (not picked or children < _GROUP):
+                c = int(order[lo])
+                lo += 1
+                if not _reaches(node.bound[c] + extra[c], threshold):  # else ruled out
+                    picked.append(c)
+                    children += int(node.open[c].sum())
+            if not picked:
                 return False
-            group = order[lo:hi]
+            group = np.array(picked)
             at, k = np.nonzero(node.open[group])
             try:
                 values = self.values_one(node.child[group[at], k])
@@ -281,7 +294,6 @@ class _Search:
             exact[group] = True
             for v in value[group] + extra[group]:
                 bisect.insort(best, float(v))
-            lo = hi
         return False
 
 
@@ -329,6 +341,7 @@ def expected_remaining(
     extra_cost: np.ndarray | None = None,
     budget: Budget | None = None,
     state: np.ndarray | None = None,
+    leaf: str = "touch",
 ) -> SearchResult:
     """Expected remaining touches E_P(S) of each root path P (this touch included).
 
@@ -338,7 +351,9 @@ def expected_remaining(
     ``E_P + extra_cost`` are guaranteed exact and the others may keep their
     lower bound; `budget` stops the search (anytime: the best found so far,
     `truncated` set); `state` is the hypothesis set S (bool over classes or a
-    bitset; default all classes).
+    bitset; default all classes); `leaf` values the open sets at the horizon:
+    ``"touch"`` one touch each (every value a lower bound), ``"entropy"``
+    max(1, log |T| / rate) (see the module's text).
 
     >>> from planner.planning.bitsets import SurvivorTable
     >>> eye = np.eye(3, dtype=bool)
@@ -349,10 +364,22 @@ def expected_remaining(
     """
     if depth is not None and depth < 1:
         raise ValueError("depth must be >= 1 or None")
-    search = _Search(table, budget or Budget())
+    if leaf not in LEAVES:
+        raise ValueError(f"leaf must be one of {LEAVES}")
+    full = _full_state(table, state)
+    rate = information_rate(table, full) if leaf == "entropy" else None
+    search = _Search(table, budget or Budget(), rate)
     root_paths = np.arange(table.n_paths) if paths is None else np.asarray(paths, dtype=int)
     extra = np.zeros(table.n_paths) if extra_cost is None else np.asarray(extra_cost, float)
-    return search.rank(_full_state(table, state), depth, root_paths, top_k, extra)
+    return search.rank(full, depth, root_paths, top_k, extra)
+
+
+def information_rate(table: SurvivorTable, state: np.ndarray) -> float | None:
+    """The most information (nats) one path gives on the set `state` (W,): the
+    largest expected entropy reduction of its classes; None when none gives any."""
+    gain = information_gain(table, table.weight * unpack_bits(state, table.n_classes))
+    best = float(gain.max(initial=0.0))
+    return best if best > 1e-9 else None
 
 
 def state_value(

@@ -12,6 +12,12 @@ where a child is open when it is neither S itself nor settled. A state is
 settled when no path can split it: it holds one class, or only classes that are
 pairwise inseparable. The search that walks these nodes is in
 :mod:`planner.planning.search`.
+
+An open set at the search's horizon (a leaf) is valued at one touch, which keeps
+every value a lower bound, or, given the information `rate` (nats) of the best
+path at the root, at ``max(1, log |T| / rate)``: a large set left at the horizon
+costs the touches it would take at that rate. `one_deep` and `bound_one` value
+leaves so; `bound` always counts one touch (it prunes).
 """
 
 from __future__ import annotations
@@ -42,12 +48,14 @@ class Node:
     w_stay: np.ndarray  # (C,) weight of truths that leave S unchanged
     open: np.ndarray  # (C, m) children that are neither S nor settled
     bound: np.ndarray  # (C,) admissible lower bound of E_P(S); inf when uninformative
+    one_deep: np.ndarray  # (C,) E_P(S) one touch deep, open children at their leaf value
 
 
 class SearchSpace:
     """The survivor table as the search reads it: the survivor bitsets `bits`
     (C, K, W) and by class (K, C, W), the class weights, which classes no path
-    tells apart; `states` counts the states expanded (one-touch bounds included).
+    tells apart, the information `rate` leaves are valued at (None: one touch);
+    `states` counts the states expanded (one-touch bounds included).
 
     >>> from planner.planning.bitsets import SurvivorTable, pack_bits
     >>> eye = np.eye(3, dtype=bool)
@@ -56,7 +64,8 @@ class SearchSpace:
     [1.0]
     """
 
-    def __init__(self, table: SurvivorTable) -> None:
+    def __init__(self, table: SurvivorTable, rate: float | None = None) -> None:
+        self.rate = rate
         self.bits = table.bits
         self.weight = table.weight
         self.n = table.n_classes
@@ -69,6 +78,14 @@ class SearchSpace:
         self.one_word = self.bits.shape[-1] == 1
         self.states = 0
 
+    def leaf_value(self, count: np.ndarray | int) -> np.ndarray:
+        """Touches an open leaf set of `count` classes is valued at: 1 without a
+        `rate`, else max(1, log(count) / rate)."""
+        count = np.asarray(count, dtype=float)
+        if self.rate is None:
+            return np.ones_like(count)
+        return np.maximum(1.0, np.log(np.maximum(count, 1.0)) / self.rate)
+
     @cached_property
     def leaf(self) -> np.ndarray:
         """The paths one touch deep values need: no other path dominates them.
@@ -77,7 +94,9 @@ class SearchSpace:
         Q' leaves settled Q does too and every member Q leaves with T Q' does too;
         (1 + o) / (1 - s) grows with s and with o + s, so Q's one-touch bound
         ``(1 + w(open | T)) / (1 - w(stay | T))`` is never above Q''s. (Deeper
-        values need not follow: E is not monotone in the set.)"""
+        values need not follow: E is not monotone in the set. With leaves valued
+        above one touch, a path can beat one that dominates it only through a stay
+        worth less than a leaf; one-touch values still take these paths only.)"""
         return undominated(self.bits)
 
     @cached_property
@@ -145,6 +164,7 @@ class SearchSpace:
             stay = word == state[0]
             open_ = ~stay & ((word & (word - np.uint64(1))) != 0)
             child = word[..., None]
+            count = popcount(child)
         else:
             child = bits[:, idx, :] & state
             # S_P(h) & S lies within S: it is S when it has as many members
@@ -165,11 +185,16 @@ class SearchSpace:
         bound[informative] = (1.0 + open_[informative].astype(float) @ w) / (
             1.0 - w_stay[informative]
         )
-        return Node(child, w, w_stay, open_, bound)
+        one_deep = bound.copy()
+        if self.rate is not None:
+            # E_P(S) one touch deep: (1 + sum_{open} w(h|S) leaf(|S_P(h) & S|)) / (1 - w_stay)
+            leaf = np.where(open_, self.leaf_value(count), 0.0)
+            one_deep[informative] = (1.0 + leaf[informative] @ w) / (1.0 - w_stay[informative])
+        return Node(child, w, w_stay, open_, bound, one_deep)
 
     def bound_one(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """(n,) min over paths of the one-touch bound of each set T (n, W) with
-        members idx (n, M) (-1 = padding): `expand(T).bound.min()` for a batch."""
+        """(n,) min over paths of the one-touch value of each set T (n, W) with
+        members idx (n, M) (-1 = padding): `expand(T).one_deep.min()` for a batch."""
         self.states += len(sets)
         real = idx >= 0
         g = np.maximum(idx, 0)
@@ -196,8 +221,9 @@ class SearchSpace:
                 settled[at] |= only[some] & clique[:, None]
         open_ = ~stay & ~settled & real[..., None]
         w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
-        w_open = np.einsum("bmc,bm->bc", open_.astype(float), w)
+        leaf = np.where(open_, self.leaf_value(count), 0.0)
+        w_open = np.einsum("bmc,bm->bc", leaf, w)
         informative = w_stay < 1 - 1e-12
-        # E_P(T) >= (1 + sum_{open children} w(h|T)) / (1 - w_stay)
+        # E_P(T) = (1 + sum_{open children} w(h|T) leaf(child)) / (1 - w_stay)
         bound = (1.0 + w_open) / np.where(informative, 1.0 - w_stay, 1.0)
         return np.where(informative, bound, np.inf).min(axis=1)

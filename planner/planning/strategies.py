@@ -3,7 +3,8 @@
 Strategies: ``random`` (thesis Exp. I), ``thesis`` (opening probes, then the
 grid windows of :mod:`planner.image.windows` in CHOOSE order), ``pdm`` (max P(DM)),
 ``pruning`` (max expected pruning), ``lookahead`` (min expected remaining
-touches, `depth` deep), ``optimal`` (exact DP over survivor sets for at most
+touches, `depth` deep, a set still open at the horizon valued by its entropy against
+the best gain per touch), ``optimal`` (exact DP over survivor sets for at most
 `optimal_max_classes` classes, else lookahead, saying so), and the published peers on
 the same table: ``ec2`` (max expected edge weight cut), ``infogain`` (max expected
 entropy reduction of the classes) and ``pomcp`` (Monte-Carlo tree search,
@@ -163,6 +164,7 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         top_k=ctx.config.max_paths,
         extra_cost=ctx.config.motion_weight * ctx.motion,
         budget=ctx.budget,
+        leaf="entropy",
     )
     # cost = E_P + motion_weight * motion_cost; exact values rank before bounds
     cost = combined_objective(result.value, ctx.motion, ctx.config.motion_weight)

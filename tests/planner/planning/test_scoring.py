@@ -16,10 +16,11 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from planner.models.outlines import make_stable_pose
-from planner.planning.bitsets import SurvivorTable, undominated
+from planner.planning.bitsets import SurvivorTable, pack_bits, undominated
 from planner.planning.budget import Budget
 from planner.planning.confusability import confusability, survivor_table
 from planner.planning.outcomes import predict_outcomes
+from planner.planning.peers import information_gain
 from planner.planning.posed_set import pose_hypotheses
 from planner.planning.scoring import (
     FAMILIES,
@@ -28,7 +29,7 @@ from planner.planning.scoring import (
     information_scores,
     motion_cost,
 )
-from planner.planning.search import expected_remaining, state_value
+from planner.planning.search import expected_remaining, information_rate, state_value
 from planner.types import ErrorBound, Hypothesis, ObjectModel, Pose, SensorBounds, Workspace
 
 
@@ -364,10 +365,15 @@ def test_information_scores_agree_with_the_class_matrix(k, n_paths, seed):
         np.testing.assert_allclose(s.expected_pruning, np.clip(pruning, 0, 1), atol=1e-12)
 
 
-def lookahead_reference(table: SurvivorTable, depth: int) -> np.ndarray:
-    """E_P(S) of every path, `depth` touches deep, by plain recursion over sets."""
+def lookahead_reference(
+    table: SurvivorTable, depth: int, rate: float | None = None, leaf_paths=None
+) -> np.ndarray:
+    """E_P(S) of every path, `depth` touches deep, by plain recursion over sets; an
+    open set s at the horizon counts 1 touch, or max(1, log |s| / rate) given a
+    `rate`; sets one touch from the horizon choose among `leaf_paths` (default all)."""
     conf, weight = table.matrix(), table.weight
     together = conf.all(axis=0)
+    last = range(len(conf)) if leaf_paths is None else leaf_paths
 
     def settled(s):
         return all(together[a, b] for a in s for b in s)
@@ -385,8 +391,8 @@ def lookahead_reference(table: SurvivorTable, depth: int) -> np.ndarray:
         if settled(s):
             return 0.0
         if d == 0:
-            return 1.0
-        return min(path(s, c, d) for c in range(len(conf)))
+            return 1.0 if rate is None else max(1.0, math.log(len(s)) / rate)
+        return min(path(s, c, d) for c in (last if d == 1 else range(len(conf))))
 
     full = frozenset(range(table.n_classes))
     return np.array([path(full, c, depth) if not settled(full) else 0.0 for c in range(len(conf))])
@@ -405,6 +411,60 @@ def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
         found = expected_remaining(table, depth)
         np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
         assert found.exact.all()
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(3, 12), st.integers(1, 6), st.integers(0, 2**31))
+def test_entropy_leaves_agree_with_plain_recursion(k, n_paths, seed):
+    # an open set at the horizon counts max(1, log |T| / rate), rate the most
+    # information one path gives at the root
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.7)
+    conf[:, np.arange(k), np.arange(k)] = True  # a truth never rules itself out
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    rate = information_rate(table, pack_bits(np.ones(k, dtype=bool)))
+    gain = information_gain(table).max()
+    assert rate == pytest.approx(gain) if gain > 1e-9 else rate is None
+    for depth in (1, 2):
+        found = expected_remaining(table, depth, leaf="entropy")
+        expected = lookahead_reference(table, depth, rate, undominated(table.bits))
+        np.testing.assert_allclose(found.value, expected, rtol=1e-9)
+        # never below the one-touch leaves' value, which is a lower bound
+        assert np.all(found.value >= expected_remaining(table, depth).value - 1e-9)
+    # as deep as the classes, no set is left open at the horizon: the exact values
+    deep = expected_remaining(table, k, leaf="entropy").value
+    np.testing.assert_allclose(deep, expected_remaining(table, None).value)
+
+
+def test_entropy_leaves_prefer_halving_to_peeling_one_class_off():
+    # 32 equal classes, five binary tests (bit j of the class) and one that tells
+    # class 0 from the rest. Two touches deep no truth is settled after halving,
+    # while peeling settles 1/32: one touch per open set prefers the peel (2.94
+    # against 2.97), though it leaves 31 classes where halving leaves 8
+    k = 32
+    bits = (np.arange(k)[:, None] >> np.arange(5)) & 1
+    halving = [bits[:, j][:, None] == bits[:, j][None, :] for j in range(5)]
+    peel = np.ones((k, k), dtype=bool)
+    peel[0, 1:] = peel[1:, 0] = False
+    table = SurvivorTable.from_matrix(np.stack([*halving, peel]), np.ones(k) / k)
+    touch = expected_remaining(table, 2).value
+    entropy = expected_remaining(table, 2, leaf="entropy").value
+    assert np.argmin(touch) == 5 and touch[5] < touch[0]
+    assert np.argmin(entropy) < 5 and entropy[5] > entropy[0] + 0.5
+
+
+def test_under_a_budget_the_most_informative_paths_get_exact_values():
+    # many paths with close bounds; the budget lets only the first group be valued:
+    # those are the most informative ones, not the ones first by bound
+    rng = np.random.default_rng(3)
+    k, n_paths = 40, 400
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.05, 0.6, (n_paths, 1, 1))
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(k) / k)
+    gain = information_gain(table)
+    found = expected_remaining(table, 2, budget=Budget(work=200_000.0))
+    assert found.truncated and found.exact.any() and not found.exact.all()
+    valued = np.flatnonzero(found.exact)
+    assert gain[valued].min() >= np.sort(gain)[::-1][len(valued) - 1] - 1e-12
 
 
 @settings(max_examples=30, deadline=None)
