@@ -35,7 +35,8 @@ class PlannedPath:
     `expected_remaining` the expected number of touches still needed if this
     path is taken, itself included (None when unknown, e.g. before any contact;
     a lower bound when the plan is `truncated`): ``lookahead`` searches it
-    `depth` touches deep (``optimal``: to the end on small sets); the other
+    `depth` touches deep, a set still open there counted at log |T| over the best
+    gain per touch (``optimal``: to the end on small sets); the other
     strategies search it `depth` deep only on small sets (at most
     `optimal_max_classes` classes) and otherwise give the one-touch bound, a
     lower bound of the deeper value; `motion_cost` the arc along

@@ -166,9 +166,17 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         budget=ctx.budget,
         leaf="entropy",
     )
-    # cost = E_P + motion_weight * motion_cost; exact values rank before bounds
+    # cost = E_P + motion_weight * motion_cost; exact values rank before bounds; equal
+    # costs go to the larger information gain (a hedge on what lies past the horizon)
     cost = combined_objective(result.value, ctx.motion, ctx.config.motion_weight)
-    keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok], ~result.exact[ok])
+    gain = information_gain(ctx.table)
+    keys = (
+        ctx.motion[ok],
+        -ctx.info.p_distinguishing[ok],
+        -gain[ok],
+        np.round(cost[ok], 9),
+        ~result.exact[ok],
+    )
     if result.truncated:
         note = "; ".join(filter(None, [note, "search stopped at the budget"]))
     return Ranking(ok[_order(keys)], result.value, result.exact, result.truncated, note)
