@@ -72,13 +72,16 @@ class SearchResult:
     `value` (C,) is exact where `exact` is set and a lower bound elsewhere
     (paths pruned as outside the best `top_k`, or not reached before the
     budget); inf for paths uninformative at the root. `truncated` says the
-    budget stopped the search; `states` counts the states expanded.
+    budget stopped the search; `states` counts the states expanded; `gain` (C,)
+    is each path's expected information gain (nats) on the root state, which
+    ordered the root's paths.
     """
 
     value: np.ndarray
     exact: np.ndarray
     truncated: bool
     states: int
+    gain: np.ndarray
 
 
 class _Search:
@@ -88,7 +91,6 @@ class _Search:
 
     def __init__(self, table: SurvivorTable, budget: Budget, rate: float | None = None) -> None:
         self.space = SearchSpace(table, rate)
-        self.table = table
         self.n = table.n_classes
         self.budget = budget
         self.exact: dict[bytes, float] = {}
@@ -207,22 +209,24 @@ class _Search:
         paths: np.ndarray,
         top_k: int | None,
         extra: np.ndarray,
+        gain: np.ndarray,
     ) -> SearchResult:
         """E_P(S) of the root `paths` from `state`, searched `depth` touches deep
-        (None: exact); with `top_k`, only the best `top_k` by ``E_P + extra`` are
-        sure to be exact, the others may keep a lower bound."""
+        (None: exact), the most informative by `gain` first; with `top_k`, only the
+        best `top_k` by ``E_P + extra`` are sure to be exact, the others may keep a
+        lower bound."""
         n_paths = self.space.bits.shape[0]
         value = np.full(n_paths, np.inf)
         exact = np.zeros(n_paths, dtype=bool)
         idx = np.flatnonzero(unpack_bits(state, self.n))
         if self.space.settled(state, idx):
             value[paths], exact[paths] = 0.0, True
-            return SearchResult(value, exact, False, self.space.states)
+            return SearchResult(value, exact, False, self.space.states, gain)
         if depth == 1:
             # E_P(S) one touch deep: only the paths asked for
             value[paths] = self.space.expand(state, idx, paths).one_deep
             exact[paths] = True
-            return SearchResult(value, exact, False, self.space.states)
+            return SearchResult(value, exact, False, self.space.states, gain)
         node = self.space.expand(state, idx)
         value[paths] = node.bound[paths]
         uninformative = paths[~np.isfinite(node.bound[paths])]
@@ -231,11 +235,10 @@ class _Search:
         live = paths[np.isfinite(node.bound[paths])]
         # the most informative first, then by bound: when the budget stops the search,
         # those are the paths with exact values (bounds of many classes lie close)
-        gain = information_gain(self.table, self.table.weight * unpack_bits(state, self.n))
         order = live[np.lexsort((node.bound[live] + extra[live], -gain[live]))]
         if child_depth == 1:
             truncated = self._rank_two(node, order, top_k, extra, value, exact)
-            return SearchResult(value, exact, truncated, self.space.states)
+            return SearchResult(value, exact, truncated, self.space.states, gain)
         best: list[float] = []  # sorted exact objectives found so far
         truncated = False
         for c in order:
@@ -251,7 +254,7 @@ class _Search:
             if done:
                 exact[c] = True
                 bisect.insort(best, v + extra[c])
-        return SearchResult(value, exact, truncated, self.space.states)
+        return SearchResult(value, exact, truncated, self.space.states, gain)
 
     def _rank_two(
         self,
@@ -367,17 +370,26 @@ def expected_remaining(
     if leaf not in LEAVES:
         raise ValueError(f"leaf must be one of {LEAVES}")
     full = _full_state(table, state)
-    rate = information_rate(table, full) if leaf == "entropy" else None
-    search = _Search(table, budget or Budget(), rate)
+    gain = state_gain(table, full)
+    search = _Search(table, budget or Budget(), _rate(gain) if leaf == "entropy" else None)
     root_paths = np.arange(table.n_paths) if paths is None else np.asarray(paths, dtype=int)
     extra = np.zeros(table.n_paths) if extra_cost is None else np.asarray(extra_cost, float)
-    return search.rank(full, depth, root_paths, top_k, extra)
+    return search.rank(full, depth, root_paths, top_k, extra, gain)
+
+
+def state_gain(table: SurvivorTable, state: np.ndarray) -> np.ndarray:
+    """(C,) each path's expected entropy reduction (nats) of the classes of the set
+    `state` (W,)."""
+    return information_gain(table, table.weight * unpack_bits(state, table.n_classes))
 
 
 def information_rate(table: SurvivorTable, state: np.ndarray) -> float | None:
-    """The most information (nats) one path gives on the set `state` (W,): the
-    largest expected entropy reduction of its classes; None when none gives any."""
-    gain = information_gain(table, table.weight * unpack_bits(state, table.n_classes))
+    """The most information (nats) one path gives on the set `state` (W,); None
+    when none gives any."""
+    return _rate(state_gain(table, state))
+
+
+def _rate(gain: np.ndarray) -> float | None:
     best = float(gain.max(initial=0.0))
     return best if best > 1e-9 else None
 

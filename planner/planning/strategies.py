@@ -170,10 +170,9 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
     # costs go to the larger P(DM) (finish now), then the larger information gain (a
     # hedge on what lies past the horizon; with wide error disks P(DM) is mostly 0)
     cost = combined_objective(result.value, ctx.motion, ctx.config.motion_weight)
-    gain = information_gain(ctx.table)
     keys = (
         ctx.motion[ok],
-        -gain[ok],
+        -result.gain[ok],
         -ctx.info.p_distinguishing[ok],
         np.round(cost[ok], 9),
         ~result.exact[ok],
