@@ -112,6 +112,7 @@ class ObservationOut(BaseModel):
 class SensorOut(BaseModel):
     position_error: float
     normal_error: float = Field(description="radians")
+    tip_radius: float = Field(0.0, description="ball tip radius; contacts are its centre")
 
 
 class WorkspaceOut(BaseModel):
@@ -353,11 +354,16 @@ def _session_create(
     big = settings.max_coordinate
 
     class SensorIn(BaseModel):
-        """Bounded sensor errors: contact position (length) and normal angle (radians)."""
+        """Bounded sensor errors: contact position (length) and normal angle (radians).
+        With a ball tip, `tip_radius` (length): each contact reported is the ball's
+        centre and `position_error` bounds that centre (DESIGN §4.14)."""
 
         model_config = ConfigDict(extra="forbid", title="SensorIn")
         position_error: Annotated[float, Field(ge=0, le=big)] = 0.0
         normal_error: Annotated[float, Field(ge=0, lt=MAX_NORMAL_ERROR)] = 0.0
+        tip_radius: Annotated[
+            float, Field(ge=0, le=big, description="ball tip radius (length)")
+        ] = 0.0
 
     class WorkspaceIn(BaseModel):
         """The safe circle: known to contain the object; paths start on it."""

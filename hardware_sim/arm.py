@@ -26,6 +26,10 @@ Error sources, each a parameter of :class:`ArmParams`:
   onto one of its two faces (the thesis' compliant E2, ch. 5.1);
 - the fingertip ball (`tip_radius`): the contact is the tip centre moved back by
   the radius along the measured normal, so the normal error moves the point too;
+  with `report_centre` the ball's centre runs along the path and stops where it
+  meets the outline grown by the radius (:meth:`World.ball_contact`), and the
+  arm reports that centre, as a controller does: the service moves it back
+  (DESIGN §4.14);
 - `reading_noise`: joint-reading noise, uniform in a disk of that radius.
 
 Frames and units: world frame, lengths in the object files' unit (mm for the
@@ -57,7 +61,8 @@ class ArmParams:
     guarded move, `touch_speed` (L/s) of the recalibrated second touch, `backoff`
     (L) before zeroing, `recalibrate` (run the back off / zero / touch routine).
     Contact: `threshold` (N), `stiffness` (N/L, inf = rigid; the force grows at
-    ``stiffness x speed`` N/s after contact), `tip_radius` (L), `vertex_zone` (L).
+    ``stiffness x speed`` N/s after contact), `tip_radius` (L), `report_centre`
+    (report the ball's centre, not the surface point), `vertex_zone` (L).
     Errors: `backlash` (rad, total wrist play), `thermal_position` (L) and
     `thermal_angle` (rad) of the joint readings at full heat, `heat_time`,
     `cool_time` (s), `cooldown_at`, `cooldown_to` (heat levels in [0, 1]),
@@ -72,6 +77,7 @@ class ArmParams:
     threshold: float = 3.0
     stiffness: float = math.inf
     tip_radius: float = 0.0
+    report_centre: bool = False
     vertex_zone: float = 0.0
     backlash: float = 0.0
     thermal_position: float = 0.0
@@ -225,7 +231,12 @@ class SimulatedArm:
         distance += move
         self._moved(move / p.speed)
         self.angle = target
-        hit = self.world.first_contact(path)
+        ball = p.report_centre and p.tip_radius > 0
+        if ball:
+            stop = self.world.ball_contact(path, p.tip_radius)
+            hit = None if stop is None else (stop[0], stop[2])  # the centre stops there
+        else:
+            hit = self.world.first_contact(path)
         if hit is None:
             distance += path.length
             self._moved(path.length / p.approach_speed)
@@ -242,6 +253,8 @@ class SimulatedArm:
         approach = float((point - origin) @ d)
         distance += approach
         self._moved(approach / p.approach_speed)
+        if ball:
+            point = stop[1]  # the surface point the ball touches
         point, face = slide_off_vertex(self.world, point, face, d, p.vertex_zone, self.rng)
         normal = self.world.posed_faces()[2][face]
         contact, extra, deflection = self._touch(point, normal, d)
@@ -301,8 +314,8 @@ class SimulatedArm:
         a = self.rng.uniform(-math.pi, math.pi)
         noise = r * np.array([math.cos(a), math.sin(a)])
         reading = centre + deflection * d + offset + noise
-        # contact = tip centre - tip_radius x measured normal
-        sensed = reading - p.tip_radius * measured
+        # contact = tip centre - tip_radius x measured normal (or the centre itself)
+        sensed = reading if p.report_centre else reading - p.tip_radius * measured
         contact = Contact(
             (float(sensed[0]), float(sensed[1])), (float(measured[0]), float(measured[1]))
         )

@@ -176,15 +176,18 @@ PRESETS: dict[str, Preset] = {
 }
 
 
-def explicit_preset(position_error: float, normal_error: float) -> Preset:
+def explicit_preset(position_error: float, normal_error: float, tip_radius: float = 0.0) -> Preset:
     """Bounded uniform noise: the contact point uniform in a disk of radius
     `position_error` (length unit), the normal turned uniformly in
-    +-`normal_error` (rad); the bounds are exactly these."""
-    bounds = SensorBounds(position_error, normal_error)
+    +-`normal_error` (rad); the bounds are exactly these. With a ball tip of
+    `tip_radius` the arm reports the ball's centre (within `position_error`) and
+    the session is told the radius."""
+    bounds = SensorBounds(position_error, normal_error, tip_radius)
+    tip = f", {tip_radius:g} ball" if tip_radius else ""
     return Preset(
-        f"bounded({position_error:g}, {math.degrees(normal_error):g} deg)",
+        f"bounded({position_error:g}, {math.degrees(normal_error):g} deg{tip})",
         bounds,
-        ArmParams(reading_noise=position_error),
+        ArmParams(reading_noise=position_error, tip_radius=tip_radius, report_centre=True),
         "bounded",
         description="uniform bounded noise",
     )

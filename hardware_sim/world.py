@@ -15,6 +15,7 @@ import shapely
 
 from planner.geometry import cast_rays
 from planner.models.prior import draw_poses, draw_stable_poses
+from planner.models.tip import cast_ball
 from planner.types import (
     Contact,
     ObjectModel,
@@ -67,6 +68,31 @@ class World:
             return None
         return origin + dist[0] * direction, int(face[0])
 
+    def ball_contact(
+        self, path: SensingPath, radius: float
+    ) -> tuple[np.ndarray, np.ndarray, int] | None:
+        """Where a ball tip of `radius` whose centre runs along `path` stops: its
+        centre, the surface point it touches and that point's face, or None on a miss.
+
+        The exact grown outline (:func:`planner.models.tip.cast_ball`). A ball
+        that meets a vertex rolls off it onto the neighbouring face whose normal
+        the path pushes against most (DESIGN §5: vertex contacts slide onto a
+        face): it rests touching the vertex, centred on that face's normal.
+        """
+        start, end, normal = self.posed_faces()
+        hit = cast_ball(path.origin, path.direction, path.length, start, end, normal, radius)
+        if hit is None:
+            return None
+        t, face, vertex = hit
+        d = np.asarray(path.direction, dtype=float)
+        if vertex < 0:
+            centre = np.asarray(path.origin, dtype=float) + t * d
+            return centre, centre - radius * normal[face], face
+        # the faces ending and starting at the vertex; the one facing the path most
+        face = min((face, vertex), key=lambda f: float(d @ normal[f]))
+        point = start[vertex]
+        return point + radius * normal[face], point, face
+
     def execute(
         self,
         path: SensingPath,
@@ -74,18 +100,25 @@ class World:
         rng: np.random.Generator | None = None,
         edge_share: float = 0.0,
     ) -> tuple[Observation, int | None]:
-        """Run a path; the contact is perturbed uniformly inside the bounds.
+        """Run a path; the contact is perturbed uniformly inside the bounds. With a
+        ball tip (`bounds.tip_radius`) the contact is the ball's centre
+        (:meth:`ball_contact`), perturbed likewise.
 
         With `edge_share` > 0, that share of the perturbations lies exactly on the
         bounds' edges (|position error| = eps_d, |normal error| = phi), the worst
         case for soundness tests. Returns the observation and the true face index.
         """
-        hit = self.first_contact(path)
+        bounds = bounds or SensorBounds()
+        r = bounds.tip_radius
+        if r > 0:  # a ball tip reports its centre
+            ball = self.ball_contact(path, r)
+            hit = None if ball is None else (ball[0], ball[2])
+        else:
+            hit = self.first_contact(path)
         if hit is None:
             return Observation(path, None), None
         point, face = hit
         rng = rng or np.random.default_rng(0)
-        bounds = bounds or SensorBounds()
         eps_d, phi = bounds.position_error, bounds.normal_error
         on_edge = rng.random() < edge_share
         radius = eps_d * (1.0 if on_edge else math.sqrt(rng.random()))

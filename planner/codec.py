@@ -133,10 +133,11 @@ def observation_from_dict(data: Mapping[str, Any]) -> Observation:
 
 # -- sessions ---------------------------------------------------------------------------------
 def sensor_to_dict(sensor: SensorBounds) -> dict[str, Any]:
-    """``{"position_error": length, "normal_error": radians}``."""
+    """``{"position_error": length, "normal_error": radians, "tip_radius": length}``."""
     return {
         "position_error": float(sensor.position_error),
         "normal_error": float(sensor.normal_error),
+        "tip_radius": float(sensor.tip_radius),
     }
 
 

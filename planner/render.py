@@ -13,8 +13,9 @@ so the functions may be called from several threads.
 Every artist carries a ``gid`` that becomes an element id in the SVG:
 ``outline-<i>``, ``ia-<k>``, ``blocking-<k>``, ``contact-<j>``,
 ``safe-circle``, ``sensor``, ``path-<rank>`` (and ``path-<rank>-label``),
-``grid-image``, ``target-<k>``; a panel's artists are prefixed ``grid-`` in
-the grid view when both views are drawn.
+``grid-image``, ``target-<k>``, and with a ball tip ``ball-<j>`` and
+``grown-<k>``; a panel's artists are prefixed ``grid-`` in the grid view when
+both views are drawn.
 """
 
 from __future__ import annotations
@@ -31,6 +32,7 @@ from planner.geometry import LENGTH_SLACK
 from planner.image.grid import GridMII, build_grid
 from planner.image.vector import VectorMII, build_mii
 from planner.image.windows import ThesisPath
+from planner.models.tip import grown_pose
 from planner.types import Contact, Observation, SensingPath, Workspace
 
 if TYPE_CHECKING:
@@ -53,6 +55,8 @@ __all__ = [
 _DRAWING = threading.Lock()
 
 _IA_COLOUR = "#7fc97f"
+#: Most hypotheses whose grown outline (ball tip) a session picture draws.
+GROWN_DRAWN = 12
 _STRENGTH_CMAP = "Reds"
 
 
@@ -193,10 +197,22 @@ def draw_overlays(
     p_distinguishing: Sequence[float | None] | None = None,
     arrow_length: float = 10.0,
     prefix: str = "",
+    tip_radius: float = 0.0,
+    grown: Sequence[np.ndarray] = (),
 ) -> None:
     """Contacts with normal arrows, the safe circle, the sensor, and ranked paths
-    (rank 1 first) labelled with their P(DM) when given. World frame."""
+    (rank 1 first) labelled with their P(DM) when given. World frame. With a ball
+    tip (`tip_radius`), each contact (the ball's centre) gets its ball, and the
+    `grown` rings (outlines grown by the radius, where the centre stops) are
+    drawn dashed."""
     from matplotlib.patches import Circle, FancyArrow
+
+    for k, ring in enumerate(grown):
+        xy = np.vstack([ring, ring[:1]])
+        ax.plot(
+            xy[:, 0], xy[:, 1], color="0.35", linestyle=":", linewidth=0.8,
+            gid=f"{prefix}grown-{k}", zorder=2,
+        )  # fmt: skip
 
     if workspace is not None:
         ax.add_patch(
@@ -224,6 +240,13 @@ def draw_overlays(
     for j, c in enumerate(_contact_list(contacts)):
         (x, y), (nx, ny) = c.point, c.normal
         ax.plot([x], [y], marker="o", color="black", markersize=4, zorder=6)
+        if tip_radius > 0:
+            ax.add_patch(
+                Circle(
+                    (x, y), tip_radius, facecolor="none", edgecolor="black",
+                    linewidth=0.8, gid=f"{prefix}ball-{j}", zorder=6,
+                )
+            )  # fmt: skip
         ax.add_patch(
             FancyArrow(
                 x,
@@ -306,6 +329,8 @@ def _figure(
     p_distinguishing: Sequence[float | None] | None,
     title: str | None,
     panel_inches: float,
+    tip_radius: float = 0.0,
+    grown: Sequence[np.ndarray] = (),
 ) -> Figure:
     from matplotlib import colormaps
     from matplotlib.backends.backend_agg import FigureCanvasAgg
@@ -339,6 +364,8 @@ def _figure(
             p_distinguishing=p_distinguishing,
             arrow_length=arrow,
             prefix=prefix,
+            tip_radius=tip_radius,
+            grown=grown,
         )
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
@@ -368,11 +395,14 @@ def render_svg(
     p_distinguishing: Sequence[float | None] | None = None,
     title: str | None = None,
     panel_inches: float = 6.0,
+    tip_radius: float = 0.0,
+    grown: Sequence[np.ndarray] = (),
 ) -> bytes:
     """SVG of the vector MII, the grid MII, or both side by side (world frame).
 
     `paths` are ranked (first = rank 1); `p_distinguishing` gives one P(DM) per
-    path (or None) for its label. Text stays text (``svg.fonttype = none``) and
+    path (or None) for its label; `tip_radius` and `grown` as for
+    :func:`draw_overlays`. Text stays text (``svg.fonttype = none``) and
     ids are stable, so the output is deterministic for a given input.
 
     >>> from planner.models.outlines import make_stable_pose
@@ -395,6 +425,8 @@ def render_svg(
         p_distinguishing=p_distinguishing,
         title=title,
         panel_inches=panel_inches,
+        tip_radius=tip_radius,
+        grown=grown,
     )
 
 
@@ -410,6 +442,8 @@ def render_png(
     title: str | None = None,
     panel_inches: float = 6.0,
     dpi: int = 100,
+    tip_radius: float = 0.0,
+    grown: Sequence[np.ndarray] = (),
 ) -> bytes:
     """PNG of the same picture as :func:`render_svg`, `dpi` pixels per inch."""
     return _picture_bytes(
@@ -424,6 +458,8 @@ def render_png(
         p_distinguishing=p_distinguishing,
         title=title,
         panel_inches=panel_inches,
+        tip_radius=tip_radius,
+        grown=grown,
     )
 
 
@@ -485,6 +521,15 @@ def session_picture(
         "p_distinguishing": [p.p_distinguishing for p in ranked],
         "title": title,
     }
+    r = session.sensor.tip_radius
+    if r > 0:  # the ball at each contact, and where its centre stops
+        kwargs["tip_radius"] = r
+        kwargs["grown"] = [
+            h.pose.apply(
+                grown_pose(session.models_by_name[h.object].stable_poses[h.stable_pose], r).outline
+            )
+            for h in hyps[:GROWN_DRAWN]
+        ]
     if fmt == "svg":
         return render_svg(mii, grid, **kwargs)
     return render_png(mii, grid, dpi=dpi, **kwargs)

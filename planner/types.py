@@ -89,13 +89,16 @@ class Pose:
 @dataclass(frozen=True)
 class SensorBounds:
     """Bounded measurement error: contact position within `position_error` (length)
-    of the truth, measured normal within `normal_error` (radians) of the true one."""
+    of the truth, measured normal within `normal_error` (radians) of the true one.
+    With a ball tip of `tip_radius` (length, DESIGN §4.14) the contact reported is
+    the ball's centre, and the position bound is the centre's."""
 
     position_error: float = 0.0
     normal_error: float = 0.0
+    tip_radius: float = 0.0
 
     def __post_init__(self) -> None:
-        for name in ("position_error", "normal_error"):
+        for name in ("position_error", "normal_error", "tip_radius"):
             value = getattr(self, name)
             if not math.isfinite(value) or value < 0:
                 raise InvalidObservationError("must be a finite number >= 0", field=name)

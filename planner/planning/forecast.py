@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InvalidObservationError
+from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
@@ -59,7 +60,9 @@ def forecast_distinguishing(
     if not hypotheses:
         return None
     budget = budget or Budget()
-    posed = pose_hypotheses(hypotheses, session.models_by_name)
+    # the ball tip's centre is what the session observes: cast the grown outlines
+    models = grown_models(session.models_by_name, session.sensor.tip_radius)
+    posed = pose_hypotheses(hypotheses, models)
     out = predict_outcomes(
         posed,
         np.array([path.origin]),

@@ -21,6 +21,7 @@ from typing import Any
 
 import numpy as np
 
+from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
@@ -118,6 +119,9 @@ def plan(
     gen = as_generator(rng)
     budget = budget or Budget(config.budget_work, config.budget_ms)
     contacts = [o.contact for o in observations if o.contact is not None]
+    # with a ball tip the plan works where its centre goes: paths are cast against
+    # the outlines grown by the radius, and contacts are the reported centres
+    models = grown_models(models, sensor.tip_radius)
 
     def finish(status: str, paths: Sequence[PlannedPath], **kw: Any) -> Plan:
         elapsed, cut = (time.perf_counter() - start) * 1000.0, kw.pop("truncated", False)

@@ -29,6 +29,7 @@ import numpy as np
 
 from planner.errors import InvalidObservationError
 from planner.memo import cached_property
+from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.equivalence import (
     SYMMETRY_FLOOR,
@@ -94,6 +95,9 @@ class Session:
             raise InvalidObservationError("object names must be unique", field="objects")
         self.models: tuple[ObjectModel, ...] = tuple(models)
         self.sensor = sensor or SensorBounds()
+        # the recognition's view of the contacts: on the surface, with a ball tip's
+        # centre moved back by its radius (DESIGN §4.14)
+        self.bounds = surface_bounds(self.sensor)
         self.workspace = workspace or Workspace()
         self.config = config or RecognitionConfig()
         self.observations: tuple[Observation, ...] = tuple(observations)
@@ -110,7 +114,7 @@ class Session:
         diameter = 2 * self.length_scale
         if self.config.bound_mode == "thesis":
             return Accuracy(diameter, math.pi)
-        return Accuracy.default_for(self.sensor, diameter)
+        return Accuracy.default_for(self.bounds, diameter)
 
     # -- events -----------------------------------------------------------------
     def observe(self, observation: Observation) -> Session:
@@ -152,7 +156,20 @@ class Session:
 
     @property
     def contacts(self) -> list:
+        """The contacts as reported (a ball tip's centre)."""
         return [o.contact for o in self.observations if o.contact is not None]
+
+    @cached_property
+    def surface_observations(self) -> tuple[Observation, ...]:
+        """The observations as the recognition sees them: each contact on the
+        surface (:func:`~planner.models.tip.surface_contact`), within `bounds`."""
+        r = self.sensor.tip_radius
+        if r == 0:
+            return self.observations
+        return tuple(
+            o if o.contact is None else Observation(o.path, surface_contact(o.contact, r))
+            for o in self.observations
+        )
 
     # -- derived state ------------------------------------------------------------
     @cached_property
@@ -170,9 +187,10 @@ class Session:
             return _Derived(TreeLevel(rows=empty), ())
         level = parent_level
         last = self.observations[-1]
-        contacts = self.contacts
+        seen = self.surface_observations
+        contacts = [o.contact for o in seen if o.contact is not None]
         if last.contact is not None:
-            level = extend(level, self._groups, contacts, self.sensor, self.config)
+            level = extend(level, self._groups, contacts, self.bounds, self.config)
         candidates = []
         rows_kept = []
         for g, (group, rows) in enumerate(zip(self._groups, level.rows, strict=True)):
@@ -180,8 +198,8 @@ class Session:
                 g,
                 group,
                 rows,
-                list(self.observations),
-                self.sensor,
+                list(seen),
+                self.bounds,
                 self.workspace,
                 self.config,
                 self.length_scale,
@@ -239,7 +257,7 @@ class Session:
         """``tau``: posed outlines closer than this are one equivalence class (DESIGN
         §2): ``2 eps_d``, fixed by the sensor; with the thesis' fixed error disk, half
         that disk, as the thesis merged what its disk could not tell apart."""
-        tau = max(2 * self.sensor.position_error, SYMMETRY_FLOOR * self.length_scale)
+        tau = max(2 * self.bounds.position_error, SYMMETRY_FLOOR * self.length_scale)
         if self.config.bound_mode == "thesis":
             core = [c.eps_t - c.cell for c in self._derived.candidates if len(c.weight)]
             if core:

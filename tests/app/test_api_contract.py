@@ -164,7 +164,7 @@ def test_create_session_answers_every_field_with_etag_and_location(client):
     assert r.headers["etag"] == '"1"' and r.headers["location"] == f"/v1/sessions/{s['id']}"
     assert s["version"] == 1 and s["status"] == "awaiting_contact"
     assert s["objects"] == ["square", "rect"]
-    assert s["sensor"] == SENSOR
+    assert s["sensor"] == {**SENSOR, "tip_radius": 0.0}
     assert s["workspace"] == {"center": [0.0, 0.0], "radius": 10.0}
     assert s["sensor_position"] == [0.0, 10.0]
     assert s["strategy"]["name"] == "lookahead" and s["strategy"]["depth"] == 2
@@ -175,7 +175,7 @@ def test_create_session_answers_every_field_with_etag_and_location(client):
 
 def test_session_defaults(client):
     s = client.post("/v1/sessions", json={"objects": [SQUARE]}).json()
-    assert s["sensor"] == {"position_error": 0.0, "normal_error": 0.0}
+    assert s["sensor"] == {"position_error": 0.0, "normal_error": 0.0, "tip_radius": 0.0}
     assert s["workspace"] == {"center": [0.0, 0.0], "radius": 200.0}
     assert s["sensor_position"] == [200.0, 0.0]
     assert s["strategy"]["name"] == "lookahead" and s["max_outliers"] == 0

@@ -8,6 +8,7 @@ from attrs import field as _attrs_field
 
 from ..types import UNSET, Unset
 
+from ..types import UNSET, Unset
 
 
 
@@ -24,10 +25,12 @@ class SensorOut:
         Attributes:
             normal_error (float): radians
             position_error (float):
+            tip_radius (float | Unset): ball tip radius; contacts are its centre Default: 0.0.
      """
 
     normal_error: float
     position_error: float
+    tip_radius: float | Unset = 0.0
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -39,6 +42,8 @@ class SensorOut:
 
         position_error = self.position_error
 
+        tip_radius = self.tip_radius
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -46,6 +51,8 @@ class SensorOut:
             "normal_error": normal_error,
             "position_error": position_error,
         })
+        if tip_radius is not UNSET:
+            field_dict["tip_radius"] = tip_radius
 
         return field_dict
 
@@ -58,9 +65,12 @@ class SensorOut:
 
         position_error = d.pop("position_error")
 
+        tip_radius = d.pop("tip_radius", UNSET)
+
         sensor_out = cls(
             normal_error=normal_error,
             position_error=position_error,
+            tip_radius=tip_radius,
         )
 
 

@@ -39,6 +39,8 @@ class SessionCreate:
             prior (None | PriorIn | Unset): what is known of the pose before touching (a fixture, a camera, the previous
                 part): no hypothesis outside it is considered, and the first probe aims at its region
             sensor (SensorIn | Unset): Bounded sensor errors: contact position (length) and normal angle (radians).
+                With a ball tip, `tip_radius` (length): each contact reported is the ball's
+                centre and `position_error` bounds that centre (DESIGN §4.14).
             sensor_position (list[float] | None | Unset): default: the point of the safe circle on its +x axis
             strategy (StrategyIn | Unset):
             workspace (WorkspaceIn | Unset): The safe circle: known to contain the object; paths start on it.
