@@ -56,6 +56,14 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
     )
     p.add_argument("--position-error", type=float, default=None, help="bounded noise (length)")
     p.add_argument("--normal-error", type=float, default=None, help="bounded noise (radians)")
+    p.add_argument(
+        "--tip-radius",
+        type=float,
+        default=0.0,
+        metavar="R",
+        help="with the bounded noise: a ball tip of radius R (length); the arm reports "
+        "the ball's centre and each session is told the radius",
+    )
     p.add_argument("--max-touches", type=int, default=20)
     p.add_argument(
         "--placement",
@@ -131,8 +139,12 @@ def _preset_from_args(args: argparse.Namespace) -> Preset:
     explicit = args.position_error is not None or args.normal_error is not None
     if explicit and args.sensor is not None:
         raise ValueError("give either --sensor or --position-error/--normal-error")
+    if args.tip_radius and not explicit:
+        raise ValueError("--tip-radius goes with --position-error/--normal-error")
     if explicit:
-        return explicit_preset(args.position_error or 0.0, args.normal_error or 0.0)
+        return explicit_preset(
+            args.position_error or 0.0, args.normal_error or 0.0, args.tip_radius
+        )
     return resolve_preset(args.sensor or "ideal")
 
 
