@@ -48,22 +48,7 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
     )
     p.add_argument("--trials", type=int, default=100)
     p.add_argument("--seed", type=int, default=0)
-    p.add_argument(
-        "--sensor",
-        default=None,
-        choices=sorted(PRESETS),
-        help="hardware preset (default ideal); or give --position-error and --normal-error",
-    )
-    p.add_argument("--position-error", type=float, default=None, help="bounded noise (length)")
-    p.add_argument("--normal-error", type=float, default=None, help="bounded noise (radians)")
-    p.add_argument(
-        "--tip-radius",
-        type=float,
-        default=0.0,
-        metavar="R",
-        help="with the bounded noise: a ball tip of radius R (length); the arm reports "
-        "the ball's centre and each session is told the radius",
-    )
+    _add_sensor_arguments(p)
     p.add_argument("--max-touches", type=int, default=20)
     p.add_argument(
         "--placement",
@@ -72,30 +57,7 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         help="where the true object lies: anywhere inside the safe circle (default), or "
         "centred on it as in the thesis' simulations",
     )
-    p.add_argument(
-        "--error-disk",
-        type=float,
-        default=None,
-        metavar="FRACTION",
-        help="recognize with the thesis' fixed error disk, this fraction of the object's "
-        "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
-    )
-    p.add_argument(
-        "--prior-radius",
-        type=float,
-        default=None,
-        metavar="R",
-        help="give each session a pose prior: a region of radius R (length) around a "
-        "point drawn within R of the true centroid, as a fixture or camera would",
-    )
-    p.add_argument(
-        "--prior-theta",
-        type=float,
-        default=None,
-        metavar="T",
-        help="and/or a rotation range of +-T degrees around an angle drawn within T of the "
-        "true rotation",
-    )
+    _add_session_arguments(p)
     p.add_argument(
         "--thesis-choice",
         default="choose",
@@ -133,6 +95,54 @@ def add_simulate_command(subparsers: Any, extended: bool = False) -> argparse.Ar
         )
     p.set_defaults(func=cmd_simulate)
     return p
+
+
+def _add_sensor_arguments(p: argparse.ArgumentParser) -> None:
+    """The simulated sensor: a hardware preset, or bounded noise with an optional ball tip."""
+    p.add_argument(
+        "--sensor",
+        default=None,
+        choices=sorted(PRESETS),
+        help="hardware preset (default ideal); or give --position-error and --normal-error",
+    )
+    p.add_argument("--position-error", type=float, default=None, help="bounded noise (length)")
+    p.add_argument("--normal-error", type=float, default=None, help="bounded noise (radians)")
+    p.add_argument(
+        "--tip-radius",
+        type=float,
+        default=0.0,
+        metavar="R",
+        help="with the bounded noise: a ball tip of radius R (length); the arm reports "
+        "the ball's centre and each session is told the radius",
+    )
+
+
+def _add_session_arguments(p: argparse.ArgumentParser) -> None:
+    """What each session is told besides the sensor: the thesis' fixed error disk, a pose prior."""
+    p.add_argument(
+        "--error-disk",
+        type=float,
+        default=None,
+        metavar="FRACTION",
+        help="recognize with the thesis' fixed error disk, this fraction of the object's "
+        "effective diameter (its simulations used 0.1), instead of bounds from the sensor",
+    )
+    p.add_argument(
+        "--prior-radius",
+        type=float,
+        default=None,
+        metavar="R",
+        help="give each session a pose prior: a region of radius R (length) around a "
+        "point drawn within R of the true centroid, as a fixture or camera would",
+    )
+    p.add_argument(
+        "--prior-theta",
+        type=float,
+        default=None,
+        metavar="T",
+        help="and/or a rotation range of +-T degrees around an angle drawn within T of the "
+        "true rotation",
+    )
 
 
 def _preset_from_args(args: argparse.Namespace) -> Preset:

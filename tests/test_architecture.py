@@ -26,6 +26,7 @@ LAYERS: tuple[tuple[str, ...], ...] = (
     ("planner.models",),
     ("planner.recognition", "planner.image"),
     ("planner.planning",),
+    ("planner.drawing",),
     ("planner.codec", "planner.render"),
     ("planner",),
     ("app", "hardware_sim"),
