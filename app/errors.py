@@ -47,6 +47,7 @@ __all__ = [
     "Problem",
     "UnauthorizedError",
     "UnavailableError",
+    "UnsupportedMediaTypeError",
     "install_error_handlers",
     "problem_response",
 ]
@@ -125,6 +126,10 @@ class PreconditionFailedError(AppError):
 
 class PreconditionRequiredError(AppError):
     status, slug, title = 428, "precondition-required", "Precondition required"
+
+
+class UnsupportedMediaTypeError(AppError):
+    status, slug, title = 415, "unsupported-media-type", "Unsupported media type"
 
 
 class UnauthorizedError(AppError):

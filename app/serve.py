@@ -14,6 +14,7 @@ from __future__ import annotations
 import argparse
 import atexit
 import inspect
+import json
 import os
 import shutil
 import socket
@@ -77,6 +78,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from uvicorn.supervisors import Multiprocess
 
     from app.observability import configure_logging
+    from app.security import LOOPBACK_NAMES, is_loopback
     from app.settings import Settings
     from app.store_types import database_label, database_url, is_url
 
@@ -85,6 +87,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
         db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())
         os.environ["TACTILE_DB"] = db
     settings = Settings()
+    if settings.allowed_hosts is None and is_loopback(args.host):
+        # a loopback service answers loopback names only: no page elsewhere reaches it
+        # by resolving its own name to this address; the workers read the environment
+        os.environ["TACTILE_ALLOWED_HOSTS"] = json.dumps(list(LOOPBACK_NAMES))
+        settings = Settings()
     configure_logging(settings.log_level, settings.log_json)
     _metrics_dir(args.workers)
     sock = bind_socket(args.host, args.port)

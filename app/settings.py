@@ -78,6 +78,11 @@ class Settings(BaseSettings):
 
     # access and logs
     api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    allowed_hosts: list[str] | None = Field(
+        None,
+        description='Host header names answered ("*": any); others get 400. None: any, '
+        "except that `tactile serve` bound to a loopback address answers only loopback names",
+    )
     log_level: Literal["debug", "info", "warning", "error"] = "info"
     log_json: bool = True
     idempotency_ttl_s: float = Field(7 * 24 * 3600.0, gt=0)

@@ -3,6 +3,8 @@ that draws it as SVG in the browser and refreshes while the session changes."""
 
 from __future__ import annotations
 
+import base64
+import hashlib
 from typing import Any
 
 import shapely
@@ -10,7 +12,7 @@ import shapely
 from planner.codec import contact_to_dict, path_to_dict, workspace_to_dict
 from planner.recognition.session import Session
 
-__all__ = ["VIEW_HTML", "mii_json"]
+__all__ = ["VIEW_CSP", "VIEW_HTML", "mii_json"]
 
 
 def _rings(geom: shapely.Geometry) -> list[list[list[list[float]]]]:
@@ -210,3 +212,21 @@ setInterval(refresh, 1500);
 </script>
 </body></html>
 """
+
+
+def _inline_hash(page: str, tag: str) -> str:
+    """The CSP source for the one inline `tag` element of `page`: 'sha256-<base64>'."""
+    start = page.index(f"<{tag}>") + len(tag) + 2
+    body = page[start : page.index(f"</{tag}>", start)]
+    return f"'sha256-{base64.b64encode(hashlib.sha256(body.encode()).digest()).decode()}'"
+
+
+#: The viewer page's policy: its own inline script and style only (by hash, so no
+#: injected element runs), fetches to its own origin, SVG drawn in place, no framing.
+VIEW_CSP = (
+    "default-src 'none'; "
+    f"script-src {_inline_hash(VIEW_HTML, 'script')}; "
+    f"style-src {_inline_hash(VIEW_HTML, 'style')}; "
+    "connect-src 'self'; img-src 'self' data:; "
+    "frame-ancestors 'none'; base-uri 'none'; form-action 'none'"
+)

@@ -7,13 +7,39 @@ from urllib.parse import quote
 from fastapi import APIRouter, Path, Query, Request, Response
 
 from app.deps import ServiceDep, auth_dependencies
-from app.errors import ConflictError, InvalidInputError, NotFoundError
+from app.errors import (
+    ConflictError,
+    InvalidInputError,
+    NotFoundError,
+    Problem,
+    UnsupportedMediaTypeError,
+)
 from app.routes import PROBLEMS
-from app.schemas import NAME_PATTERN, InputModels, ObjectCreated, ObjectList, ObjectOut
+from app.schemas import (
+    MESH_MEDIA_TYPES,
+    NAME_PATTERN,
+    InputModels,
+    ObjectCreated,
+    ObjectList,
+    ObjectOut,
+)
 from app.settings import Settings
 from app.store_types import ObjectConflictError
 
 __all__ = ["build_router"]
+
+
+def _mesh_media_type(request: Request) -> None:
+    """A mesh comes with a binary or model Content-Type. A browser sends text/plain,
+    form or multipart bodies to any origin without asking first; refusing them keeps
+    a page elsewhere from registering objects on a service it can reach."""
+    given = request.headers.get("content-type", "").split(";")[0].strip().lower()
+    if given not in MESH_MEDIA_TYPES and not given.startswith("model/"):
+        raise UnsupportedMediaTypeError(
+            f"Content-Type {given or 'none'!r}: a mesh is sent as application/octet-stream "
+            "or a model/* type",
+            field="Content-Type",
+        )
 
 
 async def _registered(response: Response, registration: Awaitable[tuple[bool, str]]):
@@ -81,7 +107,10 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         ":import-mesh",
         status_code=201,
         response_model=ObjectCreated,
-        responses={200: {"model": ObjectCreated, "description": "the same object was there"}},
+        responses={
+            200: {"model": ObjectCreated, "description": "the same object was there"},
+            415: {"model": Problem, "description": "not a binary or model/* Content-Type"},
+        },
         openapi_extra={
             "requestBody": {
                 "required": True,
@@ -102,7 +131,10 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
     ):
         """Register a 3-D part from its triangle mesh (the request body, at most the body
         limit): stable poses with their probabilities, each sliced at `height` into an
-        outline, faces carrying their out-of-plane normal. Same name, other geometry: 409."""
+        outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+        Content-Type application/octet-stream (or model/*, application/sla,
+        application/vnd.ms-pki.stl); any other: 415."""
+        _mesh_media_type(request)
         data = await request.body()
         if not data:
             raise InvalidInputError("the request body must hold the mesh file", field="body")

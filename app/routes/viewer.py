@@ -7,7 +7,7 @@ from app.deps import ServiceDep, SessionId, auth_dependencies
 from app.routes import PROBLEMS, respond
 from app.schemas import InputModels
 from app.settings import Settings
-from app.viewer import VIEW_HTML
+from app.viewer import VIEW_CSP, VIEW_HTML
 
 __all__ = ["build_router"]
 
@@ -31,6 +31,6 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         """A self-contained page drawing the MII, the planned paths and the hypotheses;
         it refreshes while the session changes."""
         await service.image_json(str(session_id))  # 404 for an unknown session
-        return HTMLResponse(VIEW_HTML)
+        return HTMLResponse(VIEW_HTML, headers={"Content-Security-Policy": VIEW_CSP})
 
     return router

@@ -18,6 +18,9 @@ def _stl(mesh: trimesh.Trimesh) -> bytes:
     return buf.getvalue()
 
 
+BINARY = {"Content-Type": "application/octet-stream"}
+
+
 @pytest.fixture
 def client(tmp_path):
     with TestClient(create_app(Settings(db_path=str(tmp_path / "m.db")))) as c:
@@ -42,7 +45,7 @@ def test_a_box_mesh_registers_with_three_weighted_poses(client):
     )
     assert again.status_code == 200
     other = _stl(trimesh.creation.box(extents=(40, 60, 90)))
-    clash = client.post("/v1/objects:import-mesh?height=8&name=box", content=other)
+    clash = client.post("/v1/objects:import-mesh?height=8&name=box", content=other, headers=BINARY)
     assert clash.status_code == 409
 
 
@@ -63,8 +66,34 @@ def test_bad_uploads_answer_problems_naming_the_field(client, query, body, field
         mesh = trimesh.creation.box(extents=(40, 60, 100))
         mesh.update_faces(mesh.faces[:-2].__len__() * [True] + [False, False])
         body = _stl(mesh)
-    r = client.post(f"/v1/objects:import-mesh?{query}", content=body)
+    r = client.post(f"/v1/objects:import-mesh?{query}", content=body, headers=BINARY)
     assert 400 <= r.status_code < 500
     assert r.headers["content-type"] == "application/problem+json"
     assert field in r.text
     assert client.get("/healthz").status_code == 200
+
+
+@pytest.mark.parametrize(
+    "content_type",
+    [None, "text/plain", "application/x-www-form-urlencoded", "multipart/form-data; b=x"],
+)
+def test_a_mesh_without_a_binary_content_type_is_415_and_registers_nothing(client, content_type):
+    """What a browser may send to any origin unasked (and no type at all) is refused."""
+    headers = {} if content_type is None else {"Content-Type": content_type}
+    body = _stl(trimesh.creation.box(extents=(40, 60, 100)))
+    r = client.post("/v1/objects:import-mesh?height=8&name=sneaky", content=body, headers=headers)
+    assert r.status_code == 415
+    assert r.headers["content-type"] == "application/problem+json"
+    assert "Content-Type" in r.text
+    assert client.get("/v1/objects/sneaky").status_code == 404
+
+
+@pytest.mark.parametrize("content_type", ["model/stl", "application/sla", "Model/STL; x=1"])
+def test_model_and_stl_content_types_are_taken(client, content_type):
+    body = _stl(trimesh.creation.box(extents=(40, 60, 100)))
+    r = client.post(
+        "/v1/objects:import-mesh?height=8&name=typed",
+        content=body,
+        headers={"Content-Type": content_type},
+    )
+    assert r.status_code == 201

@@ -139,6 +139,15 @@ def test_viewer_draws_the_image_and_refreshes_in_chromium(live_server, browser, 
         rows = browser.find_elements(By.CSS_SELECTOR, "#hypotheses tbody tr")
         assert len(rows) == len(hyps)
         assert browser.find_element(By.ID, "status").text == "ambiguous"
+        # the page ran under its policy (its own script and style allowed by hash) ...
+        refused = [e for e in browser.get_log("browser") if "Content Security" in e["message"]]
+        assert not refused, refused
+        # ... and a script injected into it does not run
+        injected = (
+            "const s = document.createElement('script'); s.textContent = 'window.pwned = 1';"
+            "document.body.appendChild(s); return window.pwned === undefined;"
+        )
+        assert browser.execute_script(injected)
         shot = Image.open(io.BytesIO(browser.get_screenshot_as_png()))
         pixels = np.asarray(shot.convert("L"), dtype=float)
         assert pixels.std() > 5, "the screenshot is blank"

@@ -1,0 +1,116 @@
+"""What browsers are told (nosniff, content security policies) and the Host allow-list."""
+
+from __future__ import annotations
+
+import json
+
+import httpx
+import pytest
+from fastapi.testclient import TestClient
+
+from app.main import create_app
+from app.security import STRICT_CSP, host_name
+from app.settings import Settings
+from app.viewer import VIEW_CSP, VIEW_HTML
+from tactile.server import Server
+from tests.conftest import DATA
+
+SESSION = {
+    "objects": json.loads((DATA / "thesis_like.json").read_text())["objects"][:1],
+    "sensor": {"position_error": 1.0, "normal_error": 0.05},
+    "workspace": {"center": [0, 0], "radius": 200},
+}
+
+
+@pytest.fixture
+def client(tmp_path):
+    with TestClient(create_app(Settings(db_path=str(tmp_path / "s.db")))) as c:
+        yield c
+
+
+def test_every_answer_is_nosniff_and_inert_but_the_viewer_runs_its_own_script(client):
+    sid = client.post("/v1/sessions", json=SESSION).json()["id"]
+    answers = {
+        "health": client.get("/healthz"),
+        "json": client.get(f"/v1/sessions/{sid}"),
+        "svg": client.get(f"/v1/sessions/{sid}/image.svg"),
+        "problem": client.get("/v1/sessions/00000000-0000-4000-8000-000000000000"),
+        "metrics": client.get("/metrics"),
+        "view": client.get(f"/v1/sessions/{sid}/view"),
+    }
+    for name, r in answers.items():
+        assert r.status_code < 500, name
+        assert r.headers["x-content-type-options"] == "nosniff", name
+        assert r.headers["referrer-policy"] == "no-referrer", name
+        expected = VIEW_CSP if name == "view" else STRICT_CSP
+        assert r.headers["content-security-policy"] == expected, name
+    # the viewer's policy names exactly its inline script and style, nothing else runs
+    policy = dict(d.strip().split(" ", 1) for d in VIEW_CSP.split(";"))
+    assert policy["default-src"] == "'none'" and policy["frame-ancestors"] == "'none'"
+    assert policy["connect-src"] == "'self'"
+    assert policy["script-src"].startswith("'sha256-") and " " not in policy["script-src"]
+    assert "unsafe" not in VIEW_CSP
+    assert VIEW_HTML.count("<script>") == 1 and VIEW_HTML.count("<style>") == 1
+
+
+def test_the_policy_hash_follows_the_page_script(monkeypatch):
+    """The hash is computed from the page: a changed script gets a changed hash."""
+    import app.viewer as viewer
+
+    other = viewer.VIEW_HTML.replace("setInterval(refresh, 1500)", "setInterval(refresh, 1600)")
+    assert viewer._inline_hash(other, "script") != viewer._inline_hash(viewer.VIEW_HTML, "script")
+    assert viewer._inline_hash(other, "style") == viewer._inline_hash(viewer.VIEW_HTML, "style")
+
+
+def test_the_documentation_pages_keep_their_scripts(client):
+    r = client.get("/docs")
+    assert r.status_code == 200 and "content-security-policy" not in r.headers
+    assert r.headers["x-content-type-options"] == "nosniff"
+
+
+@pytest.mark.parametrize(
+    ("header", "name"),
+    [
+        ("localhost:8000", "localhost"),
+        ("LOCALHOST", "localhost"),
+        ("[::1]:80", "::1"),
+        ("::1", "::1"),
+        ("127.0.0.1:1", "127.0.0.1"),
+        ("evil.example:80", "evil.example"),
+        ("", ""),
+    ],
+)
+def test_host_names_drop_port_brackets_and_case(header, name):
+    assert host_name(header) == name
+
+
+def test_a_host_off_the_allow_list_is_400_naming_the_setting(tmp_path):
+    settings = Settings(db_path=str(tmp_path / "h.db"), allowed_hosts=["localhost", "::1"])
+    with TestClient(create_app(settings), base_url="http://localhost") as c:
+        assert c.get("/healthz").status_code == 200
+        assert c.get("/healthz", headers={"Host": "[::1]:8000"}).status_code == 200
+        for host in ("rebound.example", "localhost.example", "127.0.0.2", "127.0.0.1.nip.io"):
+            r = c.post("/v1/sessions", json=SESSION, headers={"Host": host})
+            assert r.status_code == 400, host
+            assert r.headers["content-type"] == "application/problem+json"
+            assert "allowed_hosts" in r.json()["detail"]
+
+
+def test_tactile_serve_on_loopback_answers_loopback_names_only(tmp_path):
+    """A real `tactile serve` on 127.0.0.1 with the setting unset: a page that rebinds
+    its own name to 127.0.0.1 reaches nothing; the loopback names work."""
+    with Server(tmp_path / "serve.db") as server:
+        port = server.port
+        assert httpx.get(server.url + "/healthz").status_code == 200
+        assert httpx.get(f"http://localhost:{port}/healthz").status_code == 200
+        r = httpx.get(server.url + "/healthz", headers={"Host": f"attacker.example:{port}"})
+        assert r.status_code == 400 and "allowed_hosts" in r.text
+        assert r.headers["content-type"] == "application/problem+json"
+
+
+def test_an_explicit_allow_list_wins_over_the_loopback_default(tmp_path):
+    env = {"TACTILE_ALLOWED_HOSTS": json.dumps(["tactile.lab"])}
+    with Server(tmp_path / "serve.db", env=env) as server:
+        assert httpx.get(server.url + "/healthz").status_code == 400
+        r = httpx.get(server.url + "/healthz", headers={"Host": "tactile.lab"})
+        assert r.status_code == 200
