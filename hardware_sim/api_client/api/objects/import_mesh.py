@@ -126,6 +126,13 @@ def _parse_response(*, client: AuthenticatedClient | Client, response: httpx.Res
 
         return response_413
 
+    if response.status_code == 415:
+        response_415 = Problem.from_dict(response.json())
+
+
+
+        return response_415
+
     if response.status_code == 422:
         response_422 = Problem.from_dict(response.json())
 
@@ -170,6 +177,8 @@ def sync_detailed(
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
     outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    Content-Type application/octet-stream (or model/*, application/sla,
+    application/vnd.ms-pki.stl); any other: 415.
 
     Args:
         height (float): slice height above the table
@@ -217,6 +226,8 @@ def sync(
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
     outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    Content-Type application/octet-stream (or model/*, application/sla,
+    application/vnd.ms-pki.stl); any other: 415.
 
     Args:
         height (float): slice height above the table
@@ -259,6 +270,8 @@ async def asyncio_detailed(
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
     outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    Content-Type application/octet-stream (or model/*, application/sla,
+    application/vnd.ms-pki.stl); any other: 415.
 
     Args:
         height (float): slice height above the table
@@ -306,6 +319,8 @@ async def asyncio(
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
     outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    Content-Type application/octet-stream (or model/*, application/sla,
+    application/vnd.ms-pki.stl); any other: 415.
 
     Args:
         height (float): slice height above the table
