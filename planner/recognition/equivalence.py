@@ -23,7 +23,13 @@ pairs that can pass are measured: when every vertex of A lies within d of B's
 faces and back, the support functions ``h(u) = max_v u.v`` of the two vertex
 sets differ by at most d in every direction u, so a k-d tree over the support
 values in a few directions (max norm) finds every candidate pair, and the
-work grows with the hypotheses and the faces, not with their pairs.
+work grows with the hypotheses and the faces, not with their pairs. The
+support sees only the convex hull, under which the rotations of a round outline
+with a hole or a small notch all look alike; so the tree also holds each
+outline's distance from a few fixed probe points (points of the most probable
+outline). A point x of A's faces nearest a probe q lies within g/2 of a sample
+of A (g: the longest gap between samples), which lies within d of B's faces:
+the two distances from q differ by at most d + g/2, scaled to the tree's reach.
 
 Each candidate pair is then decided without measuring every point against every
 face: the points of one outline, moved into the other's model frame, query one
@@ -71,6 +77,13 @@ BRUTE_FORCE_FACES = 64
 MAX_TREE_POINTS = 20_000
 #: Points measured inside each face, besides its ends.
 EDGE_SAMPLES = 7
+#: Points of an outline checked first against the other's tree, before all of them.
+SCREEN_POINTS = 64
+#: Probe points whose distances to each posed outline also find candidate pairs:
+#: a PROBE_GRID x PROBE_GRID grid over the most probable outline's box, and PROBES
+#: points along its boundary.
+PROBE_GRID = 5
+PROBES = 8
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
 SUPPORT_DIRECTIONS = np.column_stack(
     [np.cos(np.arange(12) * np.pi / 6), np.sin(np.arange(12) * np.pi / 6)]
@@ -148,6 +161,12 @@ class PosedRings:
 def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(M,) largest distance from each of M point sets (M, P, 2) to its face set
     (M, F, 2 each): ``max_p min_f |p - segment f|``."""
+    return _nearest_face(points, starts, ends).max(axis=1)
+
+
+def _nearest_face(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """(M, P) distance from each point of M point sets (M, P, 2) to the nearest face
+    of its face set (M, F, 2 each)."""
     p = points[:, :, None, :]
     a, b = starts[:, None, :, :], ends[:, None, :, :]
     e = b - a
@@ -155,7 +174,7 @@ def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.nd
     # closest point a + u (b - a), u = clip((p - a).(b - a) / |b - a|^2, 0, 1)
     u = np.clip(np.einsum("...i,...i", p - a, e) / sq, 0.0, 1.0)
     gap = p - (a + u[..., None] * e)
-    return np.sqrt(np.einsum("...i,...i", gap, gap).min(axis=2)).max(axis=1)
+    return np.sqrt(np.einsum("...i,...i", gap, gap).min(axis=2))
 
 
 def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> np.ndarray:
@@ -198,6 +217,8 @@ def _all_within(
     """(M,) bool: does every point of points[m] (M, P, 2, world) lie within `limit`
     of the faces of target hypothesis rows[m]? Decided by the target's k-d tree,
     exactly measured only for points within h/2 of the threshold."""
+    if not len(rows):
+        return np.zeros(0, dtype=bool)
     tree, h = target.tree(limit / 2)
     q = target.to_model(points, rows)
     d, _ = tree.query(q.reshape(-1, 2), distance_upper_bound=limit + h / 2 + 1e-12)
@@ -224,17 +245,62 @@ def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float)
         # few faces: measuring every point against every face is cheaper than a tree;
         # a tree coarser than the threshold would leave nearly every point to measure
         return outline_distance(a, i, b, rows) <= limit
+    # a spread few of each outline's points first: a pair one of them fails is decided
+    few_a, few_b = _spread(a.points.shape[1]), _spread(b.points.shape[1])
     step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
     for lo in range(0, len(rows), step):
         part = rows[lo : lo + step]
-        mine = np.broadcast_to(a.points[i], (len(part), *a.points[i].shape))
-        there = _all_within(mine, b, part, limit)
-        back = np.zeros(len(part), dtype=bool)
-        if there.any():
-            pick = part[there]
-            back[there] = _all_within(b.points[pick], a, np.full(len(pick), i), limit)
-        out[lo : lo + step] = there & back
+        ok = _all_within(
+            np.broadcast_to(a.points[i, few_a], (len(part), len(few_a), 2)), b, part, limit
+        )
+        ok[ok] = _all_within(b.points[part[ok]][:, few_b], a, np.full(ok.sum(), i), limit)
+        ok[ok] = _all_within(
+            np.broadcast_to(a.points[i], (int(ok.sum()), *a.points[i].shape)), b, part[ok], limit
+        )
+        ok[ok] = _all_within(b.points[part[ok]], a, np.full(ok.sum(), i), limit)
+        out[lo : lo + step] = ok
     return out
+
+
+def _spread(count: int) -> np.ndarray:
+    """Indices of at most SCREEN_POINTS of `count` points, spread evenly."""
+    return np.unique(np.linspace(0, count - 1, min(SCREEN_POINTS, count)).astype(np.int64))
+
+
+def _probe_distances(rings: Sequence[PosedRings], probes: np.ndarray) -> np.ndarray:
+    """(N, J) distance from each probe point (J, 2) to each posed outline's faces, in
+    chunks of at most CHUNK_ELEMENTS probe x face pairs."""
+    out = []
+    for r in rings:
+        faces = r.starts.shape[1]
+        step = max(1, CHUNK_ELEMENTS // max(1, len(probes) * faces))
+        d = np.empty((len(r), len(probes)))
+        for lo in range(0, len(r), step):
+            n = min(step, len(r) - lo)
+            q = np.broadcast_to(probes, (n, *probes.shape))
+            d[lo : lo + n] = _nearest_face(q, r.starts[lo : lo + n], r.ends[lo : lo + n])
+        out.append(d)
+    return np.concatenate(out)
+
+
+def _screen_keys(rings: Sequence[PosedRings], leader: tuple[int, int], tau: float) -> np.ndarray:
+    """(N, K + J) the values the candidate tree holds: the support values, and the
+    probe distances scaled so that the same reach (tau / 2) bounds both."""
+    support = np.concatenate([r.support for r in rings])
+    g, k = leader
+    points = rings[g].points[k]
+    # a grid over the outline's box (near a hole or a notch, a rotation shows) and
+    # a few points along its boundary
+    (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)
+    side = np.linspace(0.0, 1.0, PROBE_GRID)
+    gx, gy = np.meshgrid(x0 + side * (x1 - x0), y0 + side * (y1 - y0))
+    along = points[np.linspace(0, len(points) - 1, min(PROBES, len(points))).astype(np.int64)]
+    probes = np.vstack([np.column_stack([gx.ravel(), gy.ravel()]), along])
+    gap = max(
+        float(np.hypot(*(r.model_ends - r.model_starts).T).max(initial=0.0)) for r in rings
+    ) / (EDGE_SAMPLES + 1)
+    scale = (tau / 2) / (tau / 2 + gap / 2) if tau > 0 else 0.0
+    return np.hstack([support, _probe_distances(rings, probes) * scale])
 
 
 def equivalence_classes(
@@ -254,16 +320,18 @@ def equivalence_classes(
         return label
     group = np.repeat(np.arange(len(rings)), sizes)
     local = np.arange(n) - offsets[group]
-    support = np.concatenate([r.support for r in rings])
-    tree = cKDTree(support)
+    order = np.asarray(order, dtype=np.int64)
+    first = int(order[0])
+    keys = _screen_keys(rings, (int(group[first]), int(local[first])), tau)
+    tree = cKDTree(keys)
     # a margin for rounding: the filter must never drop a pair that passes
-    reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
+    reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(keys).max()))
     classes = 0
-    for leader in np.asarray(order, dtype=np.int64):
+    for leader in order:
         if label[leader] >= 0:
             continue
         label[leader] = classes
-        near = np.asarray(tree.query_ball_point(support[leader], r=reach, p=np.inf), np.int64)
+        near = np.asarray(tree.query_ball_point(keys[leader], r=reach, p=np.inf), np.int64)
         near = near[(label[near] < 0) & (family[near] != family[leader])]
         g = group[leader]
         for h in np.unique(group[near]):

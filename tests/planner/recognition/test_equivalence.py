@@ -167,3 +167,56 @@ def test_localized_names_the_true_object_and_bounds_the_true_outline(name):
         assert outline_gap(posed(session, best), true_poly) <= bound.eps_t / 2 + 1e-6
         assert Accuracy.admits(session.accuracy, bound)
     assert localized > 0
+
+
+def _classes_without_filter(rings, order, family, tau):
+    """The greedy classes with every unclassed hypothesis measured (no candidate tree)."""
+    sizes = [len(r) for r in rings]
+    offsets = np.concatenate([[0], np.cumsum(sizes)])
+    group = np.repeat(np.arange(len(rings)), sizes)
+    local = np.arange(offsets[-1]) - offsets[group]
+    label = np.full(offsets[-1], -1)
+    classes = 0
+    for leader in order:
+        if label[leader] >= 0:
+            continue
+        label[leader] = classes
+        open_ = np.flatnonzero((label < 0) & (family != family[leader]))
+        for h in np.unique(group[open_]):
+            mine = open_[group[open_] == h]
+            close = within(rings[group[leader]], local[leader], rings[h], local[mine], tau / 2)
+            label[mine[close]] = classes
+        classes += 1
+    return label
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    st.integers(0, 2**16),
+    st.sampled_from([6, 24, 80]),
+    st.booleans(),
+    st.floats(0.1, 4.0),
+)
+def test_the_candidate_filter_drops_no_pair_that_is_within(seed, n, hole, spread):
+    """Round outlines with an off-centre hole turned a little: the support values see
+    nothing, the probe distances tell them apart; the classes must be those of
+    measuring every pair."""
+    rng = np.random.default_rng(seed)
+    ring = [
+        [30 * math.cos(2 * math.pi * k / n), 30 * math.sin(2 * math.pi * k / n)] for k in range(n)
+    ]
+    holes = [[[12 + 2 * math.cos(-a), 8 + 2 * math.sin(-a)] for a in np.linspace(0, 6, 7)]]
+    shapes = [{"name": "a", "outline": ring, **({"holes": holes} if hole else {})},
+              {"name": "b", "outline": [[x * 1.01, y] for x, y in ring]}]  # fmt: skip
+    tau = 1.0
+    rings = []
+    for shape in shapes:
+        stable = object_from_dict(shape).stable_poses[0]
+        m = 15
+        theta = rng.normal(0, 0.02 * spread, m) + rng.integers(0, n, m) * 2 * math.pi / n
+        rings.append(PosedRings.of(stable, theta, rng.normal(0, 0.3 * spread, (m, 2))))
+    total = sum(len(r) for r in rings)
+    order = rng.permutation(total)
+    family = np.arange(total)
+    got = equivalence_classes(rings, order, family, tau)
+    np.testing.assert_array_equal(got, _classes_without_filter(rings, order, family, tau))
