@@ -130,6 +130,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             f"Limits: {settings.max_outline_vertices} vertices per ring, "
             f"{settings.max_objects_per_session} objects and "
             f"{settings.max_observations_per_session} observations per session, "
+            f"{settings.max_hypotheses} hypotheses left by an observation, "
             f"plan budget up to {settings.max_plan_budget_ms:g} ms, "
             f"request bodies up to {settings.max_body_bytes} bytes."
         ),

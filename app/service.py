@@ -325,13 +325,23 @@ class SessionService:
         observation = observation_from_dict(body)  # planner checks: zero vectors, behind origin
         stored = observation_to_dict(observation)
         cap = self.settings.max_observations_per_session
+        most = self.settings.max_hypotheses
 
         def step(record: SessionRecord, session: Session) -> Session:
             if len(record.observations) >= cap:
                 raise LimitExceededError(
                     f"a session holds at most {cap} observations", field="observations"
                 )
-            return session.observe(observation)
+            new = session.observe(observation)
+            # counted before the classes, whose cost grows with the hypotheses
+            if (count := new.hypothesis_count) > most:
+                raise LimitExceededError(
+                    f"this observation would leave {count} hypotheses, over max_hypotheses "
+                    f"({most}); it is not recorded. Give the session a prior (where the part "
+                    "lies) or fewer objects or stable poses",
+                    field="max_hypotheses",
+                )
+            return new
 
         def write(
             record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot | None

@@ -60,6 +60,9 @@ class Settings(BaseSettings):
     max_objects_per_session: int = Field(16, ge=1, le=10_000)
     max_observations_per_session: int = Field(100, ge=1, le=100_000)
     max_outliers: int = Field(3, ge=0, le=100)
+    max_hypotheses: int = Field(
+        10_000, ge=1, le=10_000_000, description="hypotheses an observation may leave"
+    )
     max_plan_budget_ms: float = Field(10_000.0, gt=0, le=3_600_000)
     max_plan_budget_work: float = Field(
         10_000_000.0, gt=0, le=1e12, description="units of planning work (~us on the reference)"

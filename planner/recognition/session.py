@@ -214,6 +214,13 @@ class Session:
             candidates.append(_reindex(cand, remap[cand.row]))
         return _Derived(TreeLevel(tuple(rows_kept), level.pair_cache), tuple(candidates))
 
+    @property
+    def hypothesis_count(self) -> int:
+        """How many hypotheses the observations leave, known before their classes
+        are found (the interpretation tree and the pose fits only): what bounds the
+        cost of :attr:`hypotheses`."""
+        return sum(len(c.weight) for c in self._derived.candidates)
+
     @cached_property
     def hypotheses(self) -> list[Hypothesis]:
         """Weighted hypotheses, most probable first, with equivalence classes."""

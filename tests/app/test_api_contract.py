@@ -511,6 +511,26 @@ def test_limits_are_settings(tmp_path):
         assert is_problem(r, 422) and r.json()["errors"][0]["field"] == "strategy.budget_ms"
 
 
+def test_an_observation_leaving_too_many_hypotheses_is_409_and_not_recorded(tmp_path):
+    with api(tmp_path) as c:
+        s = create_session(c)
+        first = c.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM).json()
+    left = first["hypothesis_count"]
+    assert left > 2
+    with api(tmp_path, max_hypotheses=left - 1) as c:
+        s = create_session(c)
+        url = f"/v1/sessions/{s['id']}/observations"
+        r = c.post(url, json=BOTTOM)
+        assert is_problem(r, 409) and r.json()["errors"][0]["field"] == "max_hypotheses"
+        assert str(left) in r.json()["detail"]
+        after = c.get(f"/v1/sessions/{s['id']}").json()
+        assert after["version"] == 1 and after["observations"] == []
+        assert c.post(url, json=miss(1)).status_code == 201  # a miss leaves none
+    with api(tmp_path, max_hypotheses=left) as c:
+        s = create_session(c)
+        assert c.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM).status_code == 201
+
+
 def test_sessions_survive_a_restart_on_the_same_file(tmp_path):
     with api(tmp_path) as c:
         s = create_session(c)

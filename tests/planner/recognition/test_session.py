@@ -146,3 +146,19 @@ def test_probabilities_sum_to_one_and_sort_descending():
     s = s.observe(_obs((0, -200), (0, 1), (0, -30), (0, -1)))
     p = np.array([h.probability for h in s.hypotheses])
     assert p.sum() == pytest.approx(1.0) and np.all(np.diff(p) <= 1e-15)
+
+
+@pytest.mark.parametrize("outliers", [0, 1])
+def test_the_hypothesis_count_known_before_the_classes_is_their_number(outliers):
+    s = Session(
+        object_set("workshop"), SensorBounds(1, 0.05), WORKSPACE, RecognitionConfig(outliers)
+    )
+    assert s.hypothesis_count == 0
+    for touch in [
+        _obs((0, -200), (0, 1), (0, -30), (0, -1)),
+        _obs((200, 0), (-1, 0), (35, 0), (1, 0)),
+    ]:
+        s = s.observe(touch)
+        count = s.hypothesis_count
+        assert "hypotheses" not in s.__dict__  # nothing of the classes computed yet
+        assert count == len(s.hypotheses) > 0
