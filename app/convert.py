@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 import pydantic_core
 
+from app.errors import LimitExceededError
 from app.store_types import SessionRecord, Snapshot
 from planner.codec import (
     accuracy_from_dict,
@@ -35,7 +36,7 @@ from planner.planning.result import Plan
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
 from planner.recognition.snapshot import code_version, restore, snapshot
-from planner.types import SensorBounds, Workspace
+from planner.types import Observation, SensorBounds, Workspace
 
 __all__ = [
     "build_session",
@@ -46,6 +47,7 @@ __all__ = [
     "fingerprint",
     "if_match_ok",
     "next_state",
+    "observed",
     "plan_json",
     "plan_rng",
     "resume",
@@ -170,6 +172,21 @@ def next_state(
     new = derive(step(record, current))
     body = session_json(record.id, record.version + 1, record.config, new, limit)
     return new, body, Snapshot(code_version(), snapshot(new)) if keep else None
+
+
+def observed(session: Session, observation: Observation, most: int) -> Session:
+    """The session after `observation`, refused (409 naming ``max_hypotheses``) when
+    it would leave more than `most` hypotheses: counted from the tree, before the
+    equivalence classes, whose cost grows with the hypotheses."""
+    new = session.observe(observation)
+    if (count := new.hypothesis_count) > most:
+        raise LimitExceededError(
+            f"this observation would leave {count} hypotheses, over max_hypotheses "
+            f"({most}); it is not recorded. Give the session a prior (where the part "
+            "lies) or fewer objects or stable poses",
+            field="max_hypotheses",
+        )
+    return new
 
 
 def resume(base: Session | None, stored: bytes | None, record: SessionRecord) -> Session:

@@ -37,6 +37,7 @@ from app.convert import (
     extends,
     if_match_ok,
     next_state,
+    observed,
     plan_json,
     plan_rng,
     resume,
@@ -53,6 +54,8 @@ from app.errors import (
     PreconditionFailedError,
     UnavailableError,
 )
+from app.mesh_upload import mesh_object
+from app.schemas import input_models
 from app.session_config import resolve_models, session_config
 from app.settings import Settings
 from app.store import Store
@@ -95,6 +98,7 @@ class SessionService:
     def __init__(self, settings: Settings, store: Store) -> None:
         self.settings = settings
         self.store = store
+        self.inputs = input_models(settings)
         self.cpu = anyio.CapacityLimiter(settings.cpu_workers)
         self.db = anyio.CapacityLimiter(settings.db_pool_size)
         self.light = anyio.CapacityLimiter(settings.cpu_workers)
@@ -204,12 +208,12 @@ class SessionService:
     async def import_mesh(
         self, data: bytes, file_type: str, height: float, name: str, max_poses: int | None
     ) -> tuple[bool, str]:
-        """Register the object model of an uploaded triangle mesh."""
-        from planner.models.mesh import import_mesh_bytes
-
-        model = await self.run_cpu(import_mesh_bytes, data, file_type, height, name, max_poses)
-        created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
-        return created, model.name
+        """Register the object model of an uploaded triangle mesh (:func:`mesh_object`)."""
+        stored = await self.run_cpu(
+            mesh_object, data, file_type, height, name, max_poses, self.settings, self.inputs
+        )
+        created = await self.run_db(self.store.put_object, stored["name"], stored)
+        return created, stored["name"]
 
     # -- sessions ---------------------------------------------------------------------------
     async def _stored_objects(self, refs: Sequence[str | dict[str, Any]]) -> dict[str, Any]:
@@ -332,16 +336,7 @@ class SessionService:
                 raise LimitExceededError(
                     f"a session holds at most {cap} observations", field="observations"
                 )
-            new = session.observe(observation)
-            # counted before the classes, whose cost grows with the hypotheses
-            if (count := new.hypothesis_count) > most:
-                raise LimitExceededError(
-                    f"this observation would leave {count} hypotheses, over max_hypotheses "
-                    f"({most}); it is not recorded. Give the session a prior (where the part "
-                    "lies) or fewer objects or stable poses",
-                    field="max_hypotheses",
-                )
-            return new
+            return observed(session, observation, most)
 
         def write(
             record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot | None

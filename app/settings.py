@@ -60,6 +60,13 @@ class Settings(BaseSettings):
     max_objects_per_session: int = Field(16, ge=1, le=10_000)
     max_observations_per_session: int = Field(100, ge=1, le=100_000)
     max_outliers: int = Field(3, ge=0, le=100)
+    max_mesh_triangles: int = Field(50_000, ge=4, le=10_000_000, description="per upload")
+    max_hull_faces: int = Field(
+        2_000, ge=4, le=1_000_000, description="convex hull faces of an uploaded mesh"
+    )
+    max_sliced_poses: int = Field(
+        128, ge=1, le=100_000, description="most probable stable poses of a mesh sliced"
+    )
     max_hypotheses: int = Field(
         10_000, ge=1, le=10_000_000, description="hypotheses an observation may leave"
     )

@@ -37,12 +37,14 @@ import trimesh
 
 from planner.errors import InvalidModelError, ModelFileError
 from planner.geometry import point_segment_distance, polygon_centroid, signed_area
+from planner.models.mesh_limits import MeshLimits
 from planner.models.outlines import make_stable_pose
 from planner.types import ObjectModel
 
 __all__ = [
     "COLLINEAR_TOLERANCE",
     "MESH_FILE_TYPES",
+    "MeshLimits",
     "MeshSlice",
     "congruent",
     "drop_collinear",
@@ -374,6 +376,7 @@ def object_from_mesh(
     max_poses: int | None = None,
     *,
     seed: int = 0,
+    limits: MeshLimits | None = None,
 ) -> ObjectModel:
     """The object model of a solid standing on a table, probed at `height`.
 
@@ -385,7 +388,8 @@ def object_from_mesh(
     outline and is left out like a pose beyond `max_poses`; when every pose is
     split, or the plane misses any pose, the height is refused. Raises
     :class:`~planner.errors.InvalidModelError` naming the field (`mesh`,
-    `height`, `name`, `max_poses`) when an input cannot give a model.
+    `height`, `name`, `max_poses`) when an input cannot give a model. `limits`
+    bound the work before it is done (:class:`MeshLimits`; None: unbounded).
 
     >>> box = trimesh.creation.box((40, 60, 100))
     >>> model = object_from_mesh(box, 8.0, "box", max_poses=2)
@@ -401,11 +405,15 @@ def object_from_mesh(
         isinstance(max_poses, bool) or not isinstance(max_poses, int) or max_poses < 1
     ):
         raise InvalidModelError(f"must be an integer >= 1, got {max_poses!r}", field="max_poses")
+    limits = limits or MeshLimits()
+    limits.check_triangles(mesh)
     checked = _check_mesh(mesh)
+    limits.check_hull(checked)
     transforms, probabilities = _stable_poses(checked, sigma=0.0, n_samples=1, seed=seed)
     slices: dict[int, MeshSlice] = {}
     split: list[_SplitSliceError] = []
-    for i, transform in enumerate(transforms):
+    for i in limits.sliced(probabilities):
+        transform = transforms[i]
         try:
             slices[i] = slice_pose(checked, transform, height, pose=i)
         except _SplitSliceError as exc:
@@ -445,6 +453,7 @@ def import_mesh_bytes(
     height: float,
     name: str,
     max_poses: int | None = None,
+    limits: MeshLimits | None = None,
 ) -> ObjectModel:
     """Decode a mesh held in memory (an HTTP upload) and build its object model.
 
@@ -454,4 +463,5 @@ def import_mesh_bytes(
     gives no model.
     """
     height = _check_height(height)
-    return object_from_mesh(parse_mesh_bytes(data, file_type), height, name, max_poses)
+    mesh = parse_mesh_bytes(data, file_type)
+    return object_from_mesh(mesh, height, name, max_poses, limits=limits)

@@ -97,3 +97,43 @@ def test_model_and_stl_content_types_are_taken(client, content_type):
         headers={"Content-Type": content_type},
     )
     assert r.status_code == 201
+
+
+def _upload(c, name, mesh):
+    return c.post(
+        f"/v1/objects:import-mesh?height=10&name={name}", content=_stl(mesh), headers=BINARY
+    )
+
+
+def test_a_finely_tessellated_sphere_is_refused_before_its_poses_are_computed(client):
+    """5,120 hull faces are 5,120 stable poses to weigh and slice: 422 naming the limit."""
+    r = _upload(client, "ball", trimesh.creation.icosphere(subdivisions=4, radius=30))
+    assert r.status_code == 422 and "max_hull_faces" in r.json()["detail"]
+    assert r.json()["errors"][0]["field"] == "mesh"
+
+
+def test_mesh_limits_are_settings_and_the_result_meets_the_posted_limits(tmp_path):
+    box = trimesh.creation.box(extents=(40, 60, 100))
+    ball = trimesh.creation.icosphere(subdivisions=2, radius=30)
+    settings = Settings(db_path=str(tmp_path / "l.db"), max_mesh_triangles=100)
+    with TestClient(create_app(settings)) as c:
+        r = _upload(c, "ball", ball)  # 320 triangles
+        assert r.status_code == 422 and "max_mesh_triangles" in r.json()["detail"]
+        assert _upload(c, "box", box).status_code == 201
+    # the imported object is held to the limits of a posted one, and names where
+    settings = Settings(db_path=str(tmp_path / "m.db"), max_stable_poses=2)
+    with TestClient(create_app(settings)) as c:
+        r = _upload(c, "box", box)  # three stable poses
+        assert r.status_code == 422 and r.json()["errors"][0]["field"] == "mesh.stable_poses"
+        assert c.get("/v1/objects/box").status_code == 404
+        ok = c.post(
+            "/v1/objects:import-mesh?height=10&name=box&max_poses=2",
+            content=_stl(box),
+            headers=BINARY,
+        )
+        assert ok.status_code == 201
+    settings = Settings(db_path=str(tmp_path / "v.db"), max_outline_vertices=8)
+    with TestClient(create_app(settings)) as c:
+        r = _upload(c, "ball", ball)
+        assert r.status_code == 422
+        assert r.json()["errors"][0]["field"].startswith("mesh.stable_poses.0.outline")

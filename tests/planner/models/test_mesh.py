@@ -345,3 +345,24 @@ def test_mesh_files(tmp_path, imported: dict[str, ObjectModel]) -> None:
     with pytest.raises(ModelFileError, match=r"garbage\.obj") as info:
         load_mesh(garbage)
     assert info.value.field == "path"
+
+
+def test_limits_slice_the_most_probable_poses_and_refuse_heavy_meshes():
+    from planner.models.mesh_limits import MeshLimits
+
+    box = trimesh.creation.box((40, 60, 100))
+    whole = object_from_mesh(box, 8.0, "box")
+    # six resting faces, congruent in opposite pairs: four sliced give two poses
+    two = object_from_mesh(box, 8.0, "box", limits=MeshLimits(max_sliced_poses=4))
+    assert len(whole.stable_poses) == 3 and len(two.stable_poses) == 2
+    for a, b in zip(whole.stable_poses, two.stable_poses, strict=False):
+        np.testing.assert_allclose(a.outline, b.outline)
+    assert sum(p.probability for p in two.stable_poses) == pytest.approx(1.0)
+    with pytest.raises(InvalidModelError, match="max_mesh_triangles"):
+        object_from_mesh(box, 8.0, "box", limits=MeshLimits(max_mesh_triangles=11))
+    with pytest.raises(InvalidModelError, match="max_hull_faces"):
+        object_from_mesh(box, 8.0, "box", limits=MeshLimits(max_hull_faces=11))
+    from planner.models.library import object_to_dict
+
+    at_the_limits = object_from_mesh(box, 8.0, "box", limits=MeshLimits(12, 12, 6))
+    assert object_to_dict(at_the_limits) == object_to_dict(whole)
