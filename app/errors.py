@@ -253,6 +253,17 @@ def install_error_handlers(app: FastAPI) -> None:
         error = UnavailableError(str(exc), headers={"Retry-After": "1"})
         return await _app_error(request, error)
 
+    @app.exception_handler(MemoryError)
+    async def _out_of_memory(request: Request, exc: MemoryError) -> JSONResponse:
+        # an allocation passed the process's memory cap (max_memory_bytes, set by
+        # `tactile serve`): that request fails, the server and its other requests go on
+        error = UnavailableError(
+            "the request needed more memory than the server's max_memory_bytes allows "
+            "now; retry later, or with fewer objects, poses or observations",
+            headers={"Retry-After": "5"},
+        )
+        return await _app_error(request, error)
+
     @app.exception_handler(PlannerError)
     async def _planner_error(request: Request, exc: PlannerError) -> JSONResponse:
         status, slug, title = _planner_mapping(exc)

@@ -72,6 +72,20 @@ def _metrics_dir(workers: int) -> None:
     atexit.register(shutil.rmtree, folder, ignore_errors=True)
 
 
+def _memory_cap(limit: int | None) -> None:
+    """Cap this process's heap and anonymous memory (RLIMIT_DATA; worker processes
+    inherit it): an allocation past it raises MemoryError in the request that made
+    it, which is answered 503, instead of the kernel killing the server."""
+    if limit is None:
+        return
+    import resource
+
+    _, hard = resource.getrlimit(resource.RLIMIT_DATA)
+    if hard != resource.RLIM_INFINITY:
+        limit = min(limit, hard)
+    resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     import structlog
     import uvicorn
@@ -93,6 +107,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
         os.environ["TACTILE_ALLOWED_HOSTS"] = json.dumps(list(LOOPBACK_NAMES))
         settings = Settings()
     configure_logging(settings.log_level, settings.log_json)
+    _memory_cap(settings.max_memory_bytes)
     _metrics_dir(args.workers)
     sock = bind_socket(args.host, args.port)
     host, port = sock.getsockname()[:2]
@@ -104,6 +119,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
         workers=args.workers,
         db=database_label(settings.database),
         url=f"http://{host}:{port}",
+        allowed_hosts=settings.allowed_hosts,
+        max_memory_bytes=settings.max_memory_bytes,
     )
     if args.workers > 1:
         config = uvicorn.Config("app.main:create_app", factory=True, workers=args.workers, **common)

@@ -67,6 +67,12 @@ class Settings(BaseSettings):
     max_sliced_poses: int = Field(
         128, ge=1, le=100_000, description="most probable stable poses of a mesh sliced"
     )
+    max_memory_bytes: int | None = Field(
+        2 * 2**30,
+        ge=2**28,
+        description="heap and anonymous memory per server process (set by `tactile serve`); "
+        "an allocation past it fails its request with 503. None: no cap",
+    )
     max_hypotheses: int = Field(
         10_000, ge=1, le=10_000_000, description="hypotheses an observation may leave"
     )

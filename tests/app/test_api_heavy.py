@@ -229,3 +229,22 @@ def test_concurrent_plans_that_defeat_the_cache_are_answered(served):
     for a in answers:
         answered(a, 200, 503)
     assert any(a.status_code == 200 for a in answers)
+
+
+def test_a_request_past_the_memory_cap_is_503_and_the_server_goes_on(tmp_path):
+    """`tactile serve` caps its heap (max_memory_bytes, RLIMIT_DATA): with a cap
+    below what the maximal ring with holes needs, that request fails alone."""
+    env = {"TACTILE_MAX_MEMORY_BYTES": str(480 * 2**20)}
+    with (
+        Server(tmp_path / "cap.db", env=env) as server,
+        httpx.Client(base_url=server.url, timeout=HANG) as client,
+    ):
+        holes = [gon(100, 3, (-45 + 30 * (i % 4), -45 + 30 * (i // 4)))[::-1] for i in range(16)]
+        part = {"name": "holey", "outline": gon(500, 90), "holes": holes}
+        r = session_with(client, [part], [hit(90)])
+        assert r[-1].status_code == 503 and "max_memory_bytes" in r[-1].json()["detail"]
+        assert r[-1].headers["retry-after"]
+        assert client.get("/healthz").status_code == 200
+        small = session_with(client, [{"name": "g24", "outline": gon(24)}], [hit(40)])
+        assert [x.status_code for x in small] == [201, 201]
+        assert not [line for line in server.lines if '"status": 5' in line and "503" not in line]
