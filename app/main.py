@@ -30,7 +30,11 @@ from app.observability import (
 )
 from app.routes import health, objects, observations, pictures, plan, sessions, viewer
 from app.schemas import input_models
-from app.security import HostAllowListMiddleware, SecurityHeadersMiddleware
+from app.security import (
+    DocumentsKeyMiddleware,
+    HostAllowListMiddleware,
+    SecurityHeadersMiddleware,
+)
 from app.service import SessionService
 from app.settings import Settings
 from app.store import Store
@@ -146,6 +150,9 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(module.build_router(inputs, settings))
     install_metrics(app)
     app.add_middleware(BodyLimitMiddleware, max_body_bytes=settings.max_body_bytes)
+    if settings.api_key is not None and not settings.public_docs:
+        key = settings.api_key.get_secret_value()
+        app.add_middleware(DocumentsKeyMiddleware, key=key)
     if settings.allowed_hosts is not None:
         app.add_middleware(HostAllowListMiddleware, allowed=settings.allowed_hosts)
     app.add_middleware(SecurityHeadersMiddleware)

@@ -8,6 +8,9 @@
   (:data:`app.viewer.VIEW_CSP`: its inline script and style by hash, fetches
   to its own origin). The interactive documentation pages, which load their
   scripts from elsewhere, keep the browser's default.
+- With an API key, the schema, the documentation pages and the metrics need it
+  too (``public_docs`` opens them): they tell a stranger every operation and how
+  busy the service is.
 - With ``allowed_hosts`` set, a request whose ``Host`` is not in it is refused
   with 400 problem+json naming the setting. A page on another site that makes
   the browser resolve its own name to the service's loopback address (DNS
@@ -18,6 +21,7 @@
 from __future__ import annotations
 
 import ipaddress
+import secrets
 from collections.abc import Iterable
 
 from starlette.requests import Request
@@ -28,6 +32,7 @@ from app.errors import problem_response
 __all__ = [
     "LOOPBACK_NAMES",
     "STRICT_CSP",
+    "DocumentsKeyMiddleware",
     "HostAllowListMiddleware",
     "SecurityHeadersMiddleware",
     "host_name",
@@ -119,5 +124,36 @@ class HostAllowListMiddleware:
             slug="host-not-allowed",
             detail=f"Host {given[:100]!r} is not in the allowed_hosts setting "
             f"({', '.join(sorted(self.allowed))})",
+        )
+        await response(scope, receive, send)
+
+
+#: Paths outside /v1 that answer only with the API key (when the service has one).
+KEYED_PATHS = ("/docs", "/redoc", "/openapi.json", "/metrics")
+
+
+class DocumentsKeyMiddleware:
+    """401 problem for the schema, documentation and metrics without the API key."""
+
+    def __init__(self, app: ASGIApp, key: str) -> None:
+        self.app = app
+        self.expected = f"Bearer {key}".encode()
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or not scope["path"].startswith(KEYED_PATHS):
+            await self.app(scope, receive, send)
+            return
+        given = dict(scope.get("headers") or []).get(b"authorization", b"")
+        if secrets.compare_digest(given, self.expected):
+            await self.app(scope, receive, send)
+            return
+        response = problem_response(
+            Request(scope),
+            401,
+            title="Unauthorized",
+            slug="unauthorized",
+            detail="the schema, documentation and metrics need the API key "
+            "(Authorization: Bearer <key>), unless public_docs is set",
+            headers={"WWW-Authenticate": 'Bearer realm="tactile"'},
         )
         await response(scope, receive, send)

@@ -94,6 +94,9 @@ class Settings(BaseSettings):
 
     # access and logs
     api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    public_docs: bool = Field(
+        False, description="/docs, /redoc, /openapi.json and /metrics open without the key"
+    )
     allowed_hosts: list[str] | None = Field(
         None,
         description='Host header names answered ("*": any); others get 400. None: any, '

@@ -114,3 +114,20 @@ def test_an_explicit_allow_list_wins_over_the_loopback_default(tmp_path):
         assert httpx.get(server.url + "/healthz").status_code == 400
         r = httpx.get(server.url + "/healthz", headers={"Host": "tactile.lab"})
         assert r.status_code == 200
+
+
+@pytest.mark.parametrize("path", ["/docs", "/redoc", "/openapi.json", "/metrics"])
+def test_with_a_key_the_schema_docs_and_metrics_need_it(tmp_path, path):
+    key = {"Authorization": "Bearer s3cret"}
+    settings = Settings(db_path=str(tmp_path / "k.db"), api_key="s3cret")
+    with TestClient(create_app(settings)) as c:
+        r = c.get(path)
+        assert r.status_code == 401 and r.headers["content-type"] == "application/problem+json"
+        assert r.headers["www-authenticate"].startswith("Bearer")
+        assert c.get(path, headers={"Authorization": "Bearer nope"}).status_code == 401
+        assert c.get(path, headers=key).status_code == 200
+        assert c.get("/healthz").status_code == 200  # probes need no key
+    opened = Settings(db_path=str(tmp_path / "o.db"), api_key="s3cret", public_docs=True)
+    with TestClient(create_app(opened)) as c:
+        assert c.get(path).status_code == 200
+        assert c.get("/v1/objects").status_code == 401  # the API itself still needs it
