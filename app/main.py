@@ -29,6 +29,7 @@ from app.observability import (
     install_metrics,
 )
 from app.routes import health, objects, observations, pictures, plan, sessions, viewer
+from app.schema_links import add_links
 from app.schemas import input_models
 from app.security import (
     DocumentsKeyMiddleware,
@@ -115,7 +116,7 @@ class TactileAPI(FastAPI):
 
     def openapi(self) -> dict[str, Any]:
         if self.openapi_schema is None:
-            self.openapi_schema = _problem_media_types(super().openapi())
+            self.openapi_schema = add_links(_problem_media_types(super().openapi()))
         return self.openapi_schema
 
 

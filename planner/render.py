@@ -91,11 +91,15 @@ def _figure(
     from matplotlib.colors import Normalize
     from matplotlib.figure import Figure
 
-    if mii is None and grid is None:
+    if mii is None and grid is None and workspace is None:
         from planner.errors import PlanningNotPossibleError
 
-        raise PlanningNotPossibleError("nothing to draw: give a vector or a grid MII", field="mii")
-    views: list[VectorMII | GridMII] = [v for v in (mii, grid) if v is not None]
+        raise PlanningNotPossibleError(
+            "nothing to draw: give a vector or a grid MII, or a workspace", field="mii"
+        )
+    # no MII (no hypothesis yet, or none left): the scene alone, the safe circle,
+    # the sensor, the contacts and the planned paths (the opening probe)
+    views: list[VectorMII | GridMII | None] = [v for v in (mii, grid) if v is not None] or [None]
     fig = Figure(figsize=(panel_inches * len(views) + 0.8, panel_inches))
     FigureCanvasAgg(fig)
     axes = fig.subplots(1, len(views), squeeze=False)[0]
@@ -106,7 +110,7 @@ def _figure(
         prefix = "grid-" if kind == "grid" and len(views) > 1 else ""
         if isinstance(image, VectorMII):
             draw_mii(ax, image, prefix=prefix)
-        else:
+        elif isinstance(image, GridMII):
             draw_grid(ax, image, prefix=prefix)
         draw_overlays(
             ax,
@@ -123,7 +127,7 @@ def _figure(
         ax.set_xlim(x0, x1)
         ax.set_ylim(y0, y1)
         ax.set_aspect("equal")
-        ax.set_title(f"{kind} MII", fontsize=9)
+        ax.set_title(f"{kind} MII" if image is not None else "no hypotheses", fontsize=9)
         ax.tick_params(labelsize=7)
     mappable = ScalarMappable(
         norm=Normalize(0.0, 1.0),
@@ -251,8 +255,8 @@ def session_picture(
     cells a side) or both (`view`), with the contacts and their normals, the safe
     circle, the sensor at `sensor_position` (world frame) and the first `paths`
     ranked paths of `plan` (None: all; no plan: none) labelled with their P(DM).
-    A session without hypotheses has no MII to draw
-    (:class:`~planner.errors.PlanningNotPossibleError`).
+    A session without hypotheses (before its first contact, or with none left)
+    is drawn as its scene alone: safe circle, sensor, contacts and paths.
 
     >>> from planner.models.library import object_from_dict
     >>> from planner.recognition.session import Session
@@ -263,8 +267,10 @@ def session_picture(
     b'<?xml'
     """
     hyps = session.hypotheses
-    mii = build_mii(hyps, session.models) if view in ("vector", "both") else None
-    grid = build_grid(hyps, session.models, grid_size) if view in ("grid", "both") else None
+    mii = build_mii(hyps, session.models) if hyps and view in ("vector", "both") else None
+    grid = (
+        build_grid(hyps, session.models, grid_size) if hyps and view in ("grid", "both") else None
+    )
     ranked = () if plan is None else plan.paths if paths is None else plan.paths[:paths]
     kwargs: dict[str, Any] = {
         "contacts": session.observations,

@@ -454,7 +454,10 @@ def test_a_required_accuracy_holds_back_localized_and_the_plan_refines(client):
 def test_pictures_svg_and_png(client):
     s = create_session(client)
     url = f"/v1/sessions/{s['id']}"
-    assert is_problem(client.get(f"{url}/image.svg"), 409)  # nothing to draw yet
+    # before any contact: the scene and the opening probe, no MII yet
+    first = client.get(f"{url}/image.svg")
+    assert first.status_code == 200 and b"safe-circle" in first.content
+    assert b"path-1" in first.content and b"outline-0" not in first.content
     client.post(f"{url}/observations", json=BOTTOM)
     svg = client.get(f"{url}/image.svg")
     assert svg.status_code == 200 and svg.headers["content-type"].startswith("image/svg+xml")

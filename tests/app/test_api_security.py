@@ -131,3 +131,33 @@ def test_with_a_key_the_schema_docs_and_metrics_need_it(tmp_path, path):
     with TestClient(create_app(opened)) as c:
         assert c.get(path).status_code == 200
         assert c.get("/v1/objects").status_code == 401  # the API itself still needs it
+
+
+def test_the_schema_links_what_is_created_to_the_operations_on_it(client):
+    """Each link names a real operation and only parameters it takes; following the
+    links of a created session and object reaches them with 2xx."""
+    schema = client.get("/openapi.json").json()
+    ops = {
+        op["operationId"]: (path, method, op)
+        for path, item in schema["paths"].items()
+        for method, op in item.items()
+    }
+    followed = set()
+    sid = client.post("/v1/sessions", json=SESSION)
+    plate = client.post("/v1/objects", json={**SESSION["objects"][0], "name": "linked"})
+    answers = {"create_session": sid, "create_object": plate}
+    for op_id, (_, _, op) in ops.items():
+        for status, response in op["responses"].items():
+            for link in response.get("links", {}).values():
+                path, method, target = ops[link["operationId"]]
+                names = {p["name"] for p in target.get("parameters", [])}
+                for key in link["parameters"]:
+                    assert key.removeprefix("header.") in names, (op_id, link)
+                if op_id in answers and answers[op_id].status_code == int(status):
+                    body = answers[op_id].json()
+                    value = body["id"] if "session_id" in link["parameters"] else body["name"]
+                    url = path.replace("{session_id}", value).replace("{name}", value)
+                    if method == "get":
+                        followed.add(link["operationId"])
+                        assert client.get(url).status_code < 300, url
+    assert {"get_session", "get_report_json", "get_object", "get_view"} <= followed

@@ -107,6 +107,25 @@ def test_nothing_to_draw_is_an_error():
         render_svg()
 
 
+@pytest.mark.parametrize("touches", [0, 2])
+def test_a_session_without_hypotheses_is_drawn_as_its_scene(touches):
+    """Before the first contact, or with no hypothesis left (two contacts no
+    placement explains), the picture still shows the safe circle, the sensor, the
+    contacts and the paths."""
+    square = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+    session = Session([square], workspace=Workspace((0, 0), 50))
+    touches_made = [
+        Observation(SensingPath((0, -50), (0, 1), 100), Contact((0, -5), (0, -1))),
+        Observation(SensingPath((0, 50), (0, -1), 100), Contact((0, 30), (0, 1))),
+    ][:touches]
+    for touch in touches_made:
+        session = session.observe(touch)
+    assert not session.hypotheses
+    svg = session_picture(session, (50, 0), fmt="svg")
+    assert b'id="safe-circle"' in svg and b'id="sensor"' in svg
+    assert (b'id="contact-1"' in svg) == (touches == 2) and b"outline-0" not in svg
+
+
 def test_matplotlib_is_lazy_and_pyplot_never_loaded():
     code = (
         "import sys, planner.render as r\n"
