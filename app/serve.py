@@ -101,6 +101,11 @@ def cmd_serve(args: argparse.Namespace) -> int:
         db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())
         os.environ["TACTILE_DB"] = db
     settings = Settings()
+    if not is_loopback(args.host) and settings.api_key is None and not settings.open_access:
+        raise SystemExit(
+            f"tactile serve: binding {args.host} (reachable from other hosts) needs an API "
+            "key: set TACTILE_API_KEY, or TACTILE_OPEN_ACCESS=true to serve without one"
+        )
     if settings.allowed_hosts is None and is_loopback(args.host):
         # a loopback service answers loopback names only: no page elsewhere reaches it
         # by resolving its own name to this address; the workers read the environment

@@ -94,6 +94,9 @@ class Settings(BaseSettings):
 
     # access and logs
     api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    open_access: bool = Field(
+        False, description="let `tactile serve` bind a non-loopback address without a key"
+    )
     public_docs: bool = Field(
         False, description="/docs, /redoc, /openapi.json and /metrics open without the key"
     )

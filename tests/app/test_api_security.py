@@ -161,3 +161,33 @@ def test_the_schema_links_what_is_created_to_the_operations_on_it(client):
                         followed.add(link["operationId"])
                         assert client.get(url).status_code < 300, url
     assert {"get_session", "get_report_json", "get_object", "get_view"} <= followed
+
+
+def _serve_any_address(tmp_path, env):
+    import os
+    import subprocess
+    import sys
+
+    return subprocess.Popen(
+        [sys.executable, "-m", "tactile.cli", "serve", "--host", "0.0.0.0", "--port", "0",
+         "--db", str(tmp_path / "any.db")],
+        env={**os.environ, **env}, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+    )  # fmt: skip
+
+
+def test_serving_other_hosts_needs_a_key_unless_open_access_is_set(tmp_path):
+    refused = _serve_any_address(tmp_path, {})
+    _, err = refused.communicate(timeout=60)
+    assert refused.returncode != 0 and b"TACTILE_API_KEY" in err
+    for env in ({"TACTILE_API_KEY": "s3cret"}, {"TACTILE_OPEN_ACCESS": "true"}):
+        server = _serve_any_address(tmp_path, env)
+        try:
+            started = False
+            for line in server.stderr:
+                if b"Application startup complete" in line:
+                    started = True
+                    break
+            assert started, env
+        finally:
+            server.terminate()
+            server.wait(timeout=30)
