@@ -23,6 +23,7 @@ __all__ = [
     "ReportOut",
     "ReportResultOut",
     "ReportTouchOut",
+    "ViewLinkOut",
 ]
 
 
@@ -138,3 +139,11 @@ class PlanOut(BaseModel):
         "wall-clock cap budget_ms; null: it finished",
     )
     version: int = Field(ge=1, description="session version the plan was made for")
+
+
+class ViewLinkOut(BaseModel):
+    """A link to one session's viewer that works without the API key until it expires."""
+
+    url: str = Field(description="the page, with its token (relative to the service)")
+    token: str = Field(description="opens the page's reads of this session only")
+    expires_at: float = Field(description="Unix time after which the link is refused")

@@ -7,6 +7,7 @@ and its lifespan); nothing here is a module-level global.
 from __future__ import annotations
 
 import secrets
+import time
 import uuid
 from typing import Annotated, Any
 
@@ -16,6 +17,7 @@ from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 from app.errors import InvalidInputError, UnauthorizedError
 from app.service import SessionService
 from app.settings import Settings
+from app.view_tokens import VIEWER_READS, check_token
 
 __all__ = [
     "IdempotencyKey",
@@ -46,16 +48,31 @@ ServiceDep = Annotated[SessionService, Depends(get_service)]
 _bearer = HTTPBearer(auto_error=False, description="the API key, when the service has one")
 
 
+def _viewer_token_opens(request: Request, key: str, given: str) -> bool:
+    """A viewer token (:mod:`app.view_tokens`), in the header or, for the page
+    itself, in its ``token`` query parameter, opens the viewer's reads of its session."""
+    route = request.scope.get("route")
+    if request.method != "GET" or getattr(route, "name", None) not in VIEWER_READS:
+        return False
+    token = given or request.query_params.get("token", "")
+    session_id = str(request.path_params.get("session_id", ""))
+    return bool(token) and check_token(key, token, session_id, time.time())
+
+
 async def require_api_key(
+    request: Request,
     settings: SettingsDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> None:
-    """With ``TACTILE_API_KEY`` set, every /v1 request needs ``Authorization: Bearer <key>``."""
+    """With ``TACTILE_API_KEY`` set, every /v1 request needs ``Authorization: Bearer <key>``
+    (or, for the viewer's reads of one session, a viewer token)."""
     if settings.api_key is None:
         return
-    expected = settings.api_key.get_secret_value().encode()
-    given = (credentials.credentials if credentials else "").encode()
-    if not secrets.compare_digest(given, expected):
+    key = settings.api_key.get_secret_value()
+    given = credentials.credentials if credentials else ""
+    if not secrets.compare_digest(given.encode(), key.encode()) and not _viewer_token_opens(
+        request, key, given
+    ):
         raise UnauthorizedError(
             "missing or wrong API key (Authorization: Bearer <key>)",
             field="Authorization",

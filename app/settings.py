@@ -94,6 +94,9 @@ class Settings(BaseSettings):
 
     # access and logs
     api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    view_link_ttl_s: float = Field(
+        3600.0, gt=0, le=30 * 24 * 3600, description="how long a viewer link works"
+    )
     open_access: bool = Field(
         False, description="let `tactile serve` bind a non-loopback address without a key"
     )

@@ -104,6 +104,9 @@ VIEW_HTML = """<!doctype html>
 <script>
 "use strict";
 const base = location.pathname.replace(/\\/view$/, "");
+// with an API key the page is opened through a viewer link; its reads carry the token
+const token = new URLSearchParams(location.search).get("token");
+const auth = token ? {headers: {Authorization: "Bearer " + token}} : {};
 document.getElementById("sid").textContent = base.split("/").pop();
 const NS = "http://www.w3.org/2000/svg";
 const PALETTE = ["#1f77b4","#ff7f0e","#2ca02c","#d62728","#9467bd","#8c564b","#e377c2","#17becf"];
@@ -191,11 +194,11 @@ function tables(session, plan) {
 }
 async function refresh() {
   try {
-    const session = await (await fetch(base + "?limit=200")).json();
+    const session = await (await fetch(base + "?limit=200", auth)).json();
     if (shown === session.version) return;
     const [img, plan] = await Promise.all([
-      fetch(base + "/image.json").then(r => r.json()),
-      fetch(base + "/plan?limit=5").then(r => r.ok ? r.json() : {paths: []})]);
+      fetch(base + "/image.json", auth).then(r => r.json()),
+      fetch(base + "/plan?limit=5", auth).then(r => r.ok ? r.json() : {paths: []})]);
     draw(img, plan); tables(session, plan);
     document.getElementById("status").textContent = session.status;
     document.getElementById("version").textContent = session.version;

@@ -61,6 +61,7 @@ def test_openapi_lists_every_endpoint_with_stable_operation_ids(client):
         ("/v1/sessions/{session_id}/report.json", "get"): "get_report_json",
         ("/v1/sessions/{session_id}/report.csv", "get"): "get_report_csv",
         ("/v1/sessions/{session_id}/view", "get"): "get_view",
+        ("/v1/sessions/{session_id}/view-link", "post"): "create_view_link",
         ("/v1/objects:import-mesh", "post"): "import_mesh",
         ("/healthz", "get"): "healthz",
         ("/readyz", "get"): "readyz",

@@ -191,3 +191,48 @@ def test_serving_other_hosts_needs_a_key_unless_open_access_is_set(tmp_path):
         finally:
             server.terminate()
             server.wait(timeout=30)
+
+
+def test_a_viewer_link_opens_one_session_s_page_and_reads_and_nothing_else(tmp_path):
+    key = {"Authorization": "Bearer s3cret"}
+    settings = Settings(db_path=str(tmp_path / "v.db"), api_key="s3cret", view_link_ttl_s=60)
+    with TestClient(create_app(settings)) as c:
+        sid = c.post("/v1/sessions", json=SESSION, headers=key).json()["id"]
+        other = c.post("/v1/sessions", json=SESSION, headers=key).json()["id"]
+        assert c.get(f"/v1/sessions/{sid}/view").status_code == 401
+        assert c.post(f"/v1/sessions/{sid}/view-link").status_code == 401
+        link = c.post(f"/v1/sessions/{sid}/view-link", headers=key).json()
+        token = {"Authorization": f"Bearer {link['token']}"}
+        page = c.get(link["url"])
+        assert page.status_code == 200 and page.headers["content-type"].startswith("text/html")
+        for read in ("", "/image.json", "/plan?limit=5"):
+            assert c.get(f"/v1/sessions/{sid}{read}", headers=token).status_code == 200, read
+        # not another session, not a write, not the pictures or the report
+        assert c.get(f"/v1/sessions/{other}", headers=token).status_code == 401
+        assert c.get(f"/v1/sessions/{other}/view?token={link['token']}").status_code == 401
+        touch = {
+            "path": {"origin": [0, -200], "direction": [0, 1], "length": 400},
+            "contact": None,
+        }
+        assert (
+            c.post(f"/v1/sessions/{sid}/observations", json=touch, headers=token).status_code == 401
+        )
+        assert c.get(f"/v1/sessions/{sid}/report.json", headers=token).status_code == 401
+        assert c.get("/v1/objects", headers=token).status_code == 401
+        # a forged or expired token opens nothing
+        expires, _, sig = link["token"].partition(".")
+        forged = f"{int(expires) + 3600}.{sig}"
+        assert (
+            c.get(f"/v1/sessions/{sid}", headers={"Authorization": f"Bearer {forged}"}).status_code
+            == 401
+        )
+        from app.view_tokens import make_token
+
+        old = make_token("s3cret", sid, 1)
+        assert (
+            c.get(f"/v1/sessions/{sid}", headers={"Authorization": f"Bearer {old}"}).status_code
+            == 401
+        )
+    with TestClient(create_app(Settings(db_path=str(tmp_path / "o.db")))) as c:
+        sid = c.post("/v1/sessions", json=SESSION).json()["id"]
+        assert c.post(f"/v1/sessions/{sid}/view-link").status_code == 409

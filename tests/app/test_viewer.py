@@ -67,8 +67,9 @@ def test_image_json_and_view_page_in_process(tmp_path):
 
 
 @pytest.fixture
-def live_server(tmp_path):
-    app = create_app(Settings(db_path=str(tmp_path / "live.db")))
+def live_server(tmp_path, request):
+    key = getattr(request, "param", None)
+    app = create_app(Settings(db_path=str(tmp_path / "live.db"), api_key=key))
     with socket.socket() as s:
         s.bind(("127.0.0.1", 0))
         port = s.getsockname()[1]
@@ -159,3 +160,27 @@ def test_viewer_draws_the_image_and_refreshes_in_chromium(live_server, browser, 
         wait.until(lambda d: d.execute_script(shown) == str(state["version"]))
         after = state["hypotheses"]
         assert len(browser.find_elements(By.CSS_SELECTOR, "#hypotheses tbody tr")) == len(after)
+
+
+@pytest.mark.parametrize("live_server", ["s3cret"], indirect=True)
+def test_with_a_key_the_viewer_opens_through_its_link_in_chromium(live_server, browser):
+    import httpx
+    from selenium.webdriver.common.by import By
+    from selenium.webdriver.support.ui import WebDriverWait
+
+    key = {"Authorization": "Bearer s3cret"}
+    with httpx.Client(base_url=live_server, timeout=30, headers=key) as api:
+        sid = api.post("/v1/sessions", json=SESSION).json()["id"]
+        api.post(f"/v1/sessions/{sid}/observations", json=TOUCHES[0]).raise_for_status()
+        state = api.get(f"/v1/sessions/{sid}").json()
+        link = api.post(f"/v1/sessions/{sid}/view-link").json()
+    browser.get(live_server + link["url"])
+    WebDriverWait(browser, 60).until(
+        lambda d: d.execute_script("return document.body.dataset.version") == str(state["version"])
+    )
+    assert len(browser.find_elements(By.CSS_SELECTOR, "#mii path.outline")) == len(
+        state["hypotheses"]
+    )
+    # without the token the page itself is refused
+    browser.get(f"{live_server}/v1/sessions/{sid}/view")
+    assert "Unauthorized" in browser.page_source

@@ -50,6 +50,7 @@ from .stable_pose_out import StablePoseOut
 from .strategy_in import StrategyIn
 from .strategy_in_name import StrategyInName
 from .strategy_out import StrategyOut
+from .view_link_out import ViewLinkOut
 from .workspace_in import WorkspaceIn
 from .workspace_out import WorkspaceOut
 
@@ -104,6 +105,7 @@ __all__ = (
     "StrategyIn",
     "StrategyInName",
     "StrategyOut",
+    "ViewLinkOut",
     "WorkspaceIn",
     "WorkspaceOut",
 )

@@ -9,6 +9,7 @@ from ...types import Response, UNSET
 from ... import errors
 
 from ...models.problem import Problem
+from ...types import UNSET, Unset
 from typing import cast
 from uuid import UUID
 
@@ -16,17 +17,31 @@ from uuid import UUID
 
 def _get_kwargs(
     session_id: UUID,
+    *,
+    token: None | str | Unset = UNSET,
 
 ) -> dict[str, Any]:
     
 
     
 
-    
+    params: dict[str, Any] = {}
+
+    json_token: None | str | Unset
+    if isinstance(token, Unset):
+        json_token = UNSET
+    else:
+        json_token = token
+    params["token"] = json_token
+
+
+    params = {k: v for k, v in params.items() if v is not UNSET and v is not None}
+
 
     _kwargs: dict[str, Any] = {
         "method": "get",
         "url": "/v1/sessions/{session_id}/view".format(session_id=quote(str(session_id), safe=""),),
+        "params": params,
     }
 
 
@@ -114,15 +129,18 @@ def sync_detailed(
     session_id: UUID,
     *,
     client: AuthenticatedClient | Client,
+    token: None | str | Unset = UNSET,
 
 ) -> Response[Problem | str]:
     """ Get View
 
      A self-contained page drawing the MII, the planned paths and the hypotheses;
-    it refreshes while the session changes.
+    it refreshes while the session changes. With an API key, open it through a
+    viewer link (POST .../view-link).
 
     Args:
         session_id (UUID): session id (a random UUID)
+        token (None | str | Unset): a viewer link's token (with an API key)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -135,6 +153,7 @@ def sync_detailed(
 
     kwargs = _get_kwargs(
         session_id=session_id,
+token=token,
 
     )
 
@@ -148,15 +167,18 @@ def sync(
     session_id: UUID,
     *,
     client: AuthenticatedClient | Client,
+    token: None | str | Unset = UNSET,
 
 ) -> Problem | str | None:
     """ Get View
 
      A self-contained page drawing the MII, the planned paths and the hypotheses;
-    it refreshes while the session changes.
+    it refreshes while the session changes. With an API key, open it through a
+    viewer link (POST .../view-link).
 
     Args:
         session_id (UUID): session id (a random UUID)
+        token (None | str | Unset): a viewer link's token (with an API key)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -170,6 +192,7 @@ def sync(
     return sync_detailed(
         session_id=session_id,
 client=client,
+token=token,
 
     ).parsed
 
@@ -177,15 +200,18 @@ async def asyncio_detailed(
     session_id: UUID,
     *,
     client: AuthenticatedClient | Client,
+    token: None | str | Unset = UNSET,
 
 ) -> Response[Problem | str]:
     """ Get View
 
      A self-contained page drawing the MII, the planned paths and the hypotheses;
-    it refreshes while the session changes.
+    it refreshes while the session changes. With an API key, open it through a
+    viewer link (POST .../view-link).
 
     Args:
         session_id (UUID): session id (a random UUID)
+        token (None | str | Unset): a viewer link's token (with an API key)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -198,6 +224,7 @@ async def asyncio_detailed(
 
     kwargs = _get_kwargs(
         session_id=session_id,
+token=token,
 
     )
 
@@ -211,15 +238,18 @@ async def asyncio(
     session_id: UUID,
     *,
     client: AuthenticatedClient | Client,
+    token: None | str | Unset = UNSET,
 
 ) -> Problem | str | None:
     """ Get View
 
      A self-contained page drawing the MII, the planned paths and the hypotheses;
-    it refreshes while the session changes.
+    it refreshes while the session changes. With an API key, open it through a
+    viewer link (POST .../view-link).
 
     Args:
         session_id (UUID): session id (a random UUID)
+        token (None | str | Unset): a viewer link's token (with an API key)
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -233,5 +263,6 @@ async def asyncio(
     return (await asyncio_detailed(
         session_id=session_id,
 client=client,
+token=token,
 
     )).parsed
