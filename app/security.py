@@ -25,6 +25,7 @@ import secrets
 from collections.abc import Iterable
 
 from starlette.requests import Request
+from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
 from app.errors import problem_response
@@ -102,22 +103,43 @@ def is_loopback(host: str) -> bool:
         return False
 
 
-class HostAllowListMiddleware:
+def _header(scope: Scope, name: bytes) -> bytes:
+    return dict(scope.get("headers") or []).get(name, b"")
+
+
+class _Gate:
+    """An ASGI middleware answering the HTTP requests it does not admit with a problem."""
+
+    def __init__(self, app: ASGIApp) -> None:
+        self.app = app
+
+    def admits(self, scope: Scope) -> bool:
+        raise NotImplementedError
+
+    def refusal(self, scope: Scope) -> JSONResponse:
+        raise NotImplementedError
+
+    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
+        if scope["type"] != "http" or self.admits(scope):
+            await self.app(scope, receive, send)
+        else:
+            await self.refusal(scope)(scope, receive, send)
+
+
+class HostAllowListMiddleware(_Gate):
     """Refuse requests whose Host header names none of `allowed` (``"*"``: any)."""
 
     def __init__(self, app: ASGIApp, allowed: Iterable[str]) -> None:
-        self.app = app
+        super().__init__(app)
         self.allowed = frozenset(host_name(h) for h in allowed)
 
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or "*" in self.allowed:
-            await self.app(scope, receive, send)
-            return
-        given = dict(scope.get("headers") or []).get(b"host", b"").decode("latin-1")
-        if host_name(given) in self.allowed:
-            await self.app(scope, receive, send)
-            return
-        response = problem_response(
+    def admits(self, scope: Scope) -> bool:
+        given = _header(scope, b"host").decode("latin-1")
+        return "*" in self.allowed or host_name(given) in self.allowed
+
+    def refusal(self, scope: Scope) -> JSONResponse:
+        given = _header(scope, b"host").decode("latin-1")
+        return problem_response(
             Request(scope),
             400,
             title="Host not allowed",
@@ -125,29 +147,26 @@ class HostAllowListMiddleware:
             detail=f"Host {given[:100]!r} is not in the allowed_hosts setting "
             f"({', '.join(sorted(self.allowed))})",
         )
-        await response(scope, receive, send)
 
 
 #: Paths outside /v1 that answer only with the API key (when the service has one).
 KEYED_PATHS = ("/docs", "/redoc", "/openapi.json", "/metrics")
 
 
-class DocumentsKeyMiddleware:
+class DocumentsKeyMiddleware(_Gate):
     """401 problem for the schema, documentation and metrics without the API key."""
 
     def __init__(self, app: ASGIApp, key: str) -> None:
-        self.app = app
+        super().__init__(app)
         self.expected = f"Bearer {key}".encode()
 
-    async def __call__(self, scope: Scope, receive: Receive, send: Send) -> None:
-        if scope["type"] != "http" or not scope["path"].startswith(KEYED_PATHS):
-            await self.app(scope, receive, send)
-            return
-        given = dict(scope.get("headers") or []).get(b"authorization", b"")
-        if secrets.compare_digest(given, self.expected):
-            await self.app(scope, receive, send)
-            return
-        response = problem_response(
+    def admits(self, scope: Scope) -> bool:
+        return not scope["path"].startswith(KEYED_PATHS) or secrets.compare_digest(
+            _header(scope, b"authorization"), self.expected
+        )
+
+    def refusal(self, scope: Scope) -> JSONResponse:
+        return problem_response(
             Request(scope),
             401,
             title="Unauthorized",
@@ -156,4 +175,3 @@ class DocumentsKeyMiddleware:
             "(Authorization: Bearer <key>), unless public_docs is set",
             headers={"WWW-Authenticate": 'Bearer realm="tactile"'},
         )
-        await response(scope, receive, send)
