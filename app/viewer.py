@@ -32,11 +32,15 @@ def _lines(geom: shapely.Geometry) -> list[list[list[float]]]:
 
 
 def mii_json(session: Session, sensor_position: list[float]) -> dict[str, Any]:
-    """World-frame geometry of the session's MII for drawing (lengths in model units)."""
-    from planner.image.vector import build_mii
+    """World-frame geometry of the session's MII for drawing (lengths in model units):
+    of many hypotheses the most probable within the drawing budget
+    (:func:`~planner.image.vector.drawable`), `drawn` of `hypothesis_count`."""
+    from planner.image.vector import build_mii, drawable
 
-    hyps = session.hypotheses
+    hyps = drawable(session.hypotheses, session.models)
     out: dict[str, Any] = {
+        "hypothesis_count": len(session.hypotheses),
+        "drawn": len(hyps),
         "status": session.status,
         "workspace": workspace_to_dict(session.workspace),
         "sensor_position": list(sensor_position),
@@ -203,7 +207,10 @@ async function refresh() {
     document.getElementById("status").textContent = session.status;
     document.getElementById("version").textContent = session.version;
     document.getElementById("count").textContent = session.hypotheses.length;
-    document.getElementById("note").textContent = plan.truncated ? "(plan truncated by its budget)" : "";
+    const notes = [];
+    if (plan.truncated) notes.push("(plan truncated by its budget)");
+    if (img.drawn < img.hypothesis_count) notes.push(`(drawing the ${img.drawn} most probable)`);
+    document.getElementById("note").textContent = notes.join(" ");
     shown = session.version;
     document.body.dataset.version = session.version;
   } catch (err) {

@@ -30,7 +30,7 @@ import numpy as np
 from planner.drawing import GROWN_DRAWN, STRENGTH_CMAP, draw_grid, draw_mii, draw_overlays
 from planner.geometry import LENGTH_SLACK
 from planner.image.grid import GridMII, build_grid
-from planner.image.vector import VectorMII, build_mii
+from planner.image.vector import VectorMII, build_mii, drawable
 from planner.image.windows import ThesisPath
 from planner.models.tip import grown_pose
 from planner.types import Contact, Observation, SensingPath, Workspace
@@ -255,6 +255,9 @@ def session_picture(
     cells a side) or both (`view`), with the contacts and their normals, the safe
     circle, the sensor at `sensor_position` (world frame) and the first `paths`
     ranked paths of `plan` (None: all; no plan: none) labelled with their P(DM).
+    Of many hypotheses, the most probable within
+    :data:`~planner.image.vector.DRAWN_FACES` posed faces are drawn, and the title
+    says how many.
     A session without hypotheses (before its first contact, or with none left)
     is drawn as its scene alone: safe circle, sensor, contacts and paths.
 
@@ -266,7 +269,10 @@ def session_picture(
     >>> session_picture(session, (10, 0), fmt="svg")[:5]
     b'<?xml'
     """
-    hyps = session.hypotheses
+    hyps = drawable(session.hypotheses, session.models)
+    if len(hyps) < len(session.hypotheses):
+        shown = f"the {len(hyps)} most probable of {len(session.hypotheses)} hypotheses"
+        title = f"{title}: {shown}" if title else shown
     mii = build_mii(hyps, session.models) if hyps and view in ("vector", "both") else None
     grid = (
         build_grid(hyps, session.models, grid_size) if hyps and view in ("grid", "both") else None

@@ -56,6 +56,7 @@ def test_image_json_and_view_page_in_process(tmp_path):
         img = client.get(f"/v1/sessions/{sid}/image.json").json()
         hyps = client.get(f"/v1/sessions/{sid}").json()["hypotheses"]
         assert len(img["outlines"]) == len(hyps) > 1
+        assert img["drawn"] == img["hypothesis_count"] == len(hyps)
         assert img["blocking"] and all(0 < b["strength"] <= 1 + 1e-9 for b in img["blocking"])
         assert img["observations"][0]["contact"]["normal"] == [0.0, -1.0]
         page = client.get(f"/v1/sessions/{sid}/view")

@@ -190,3 +190,27 @@ def test_pictures_drawn_in_threads_are_the_pictures_drawn_one_by_one():
             pool.map(lambda _: render_svg(mii, grid, paths=paths, workspace=WORKSPACE), range(3))
         )
     assert drawn == [serial] * 3
+
+
+def test_many_faces_draw_the_most_probable_hypotheses_and_say_so():
+    """Past DRAWN_FACES posed faces the picture draws the most probable prefix (the
+    overlay of the blocking regions grows faster than the faces) and its title says
+    how many of how many."""
+    import math
+
+    from planner.image.vector import DRAWN_FACES, drawable
+    from planner.types import SensorBounds
+
+    ring = [[40 * math.cos(k * math.pi / 60), 40 * math.sin(k * math.pi / 60)] for k in range(120)]
+    part = object_from_dict({"name": "round", "outline": ring})
+    session = Session([part], SensorBounds(1.0, 0.05), Workspace((0, 0), 200)).observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -40), (0, -1)))
+    )
+    hyps = session.hypotheses
+    drawn = drawable(hyps, session.models)
+    assert 120 * len(hyps) > DRAWN_FACES and len(drawn) == DRAWN_FACES // 120
+    assert drawn == tuple(hyps[: len(drawn)])
+    svg = session_picture(session, (200, 0), fmt="svg", view="vector")
+    assert f"the {len(drawn)} most probable of {len(hyps)} hypotheses".encode() in svg
+    assert f'id="outline-{len(drawn) - 1}"'.encode() in svg
+    assert f'id="outline-{len(drawn)}"'.encode() not in svg
