@@ -138,6 +138,9 @@ def test_a_maximal_ring_with_the_most_holes_is_answered(served):
     r = session_with(client, [part], [hit(90)])
     assert [x.status_code for x in r] == [201, 201]
     assert r[1].json()["hypothesis_count"] > 0
+    sid = r[0].json()["id"]
+    image = answered(client.get(f"/v1/sessions/{sid}/image.json"), 200).json()
+    assert 0 < image["drawn"] < image["hypothesis_count"]  # the drawing budget
 
 
 def test_many_objects_times_poses_are_refused_at_the_hypothesis_limit(served):
