@@ -10,6 +10,7 @@ frame, lengths in the object files' unit, angles in radians.
 
 from __future__ import annotations
 
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -22,7 +23,10 @@ from planner.types import SensorBounds
 if TYPE_CHECKING:
     from planner.planning.posed_set import PosedSet
 
-__all__ = ["boundary_aims"]
+__all__ = ["PAIR_CHUNK", "boundary_aims"]
+
+#: The most candidate (point, face) pairs held at once.
+PAIR_CHUNK = 2_000_000
 
 
 def boundary_aims(
@@ -40,15 +44,17 @@ def boundary_aims(
     if count == 0 or face_samples == 0:
         return np.zeros((0, 2)), np.zeros((0, 2))
     frac = (np.arange(face_samples) + 0.5) / face_samples
-    pts = posed.start[..., None, :] + frac[:, None] * (posed.end - posed.start)[..., None, :]
-    owner = np.broadcast_to(np.arange(len(posed))[:, None, None], pts.shape[:-1])
-    keep = np.broadcast_to(posed.valid[..., None], pts.shape[:-1])
-    normals = np.broadcast_to(posed.normal[..., None, :], pts.shape)
-    pts, owner, normals = pts[keep], owner[keep], normals[keep]
-    limit = 8 * count
-    if len(pts) > limit:
-        pick = np.sort(rng.choice(len(pts), size=limit, replace=False))
-        pts, owner, normals = pts[pick], owner[pick], normals[pick]
+    # the sample points (valid face x sample, in that order) are drawn before any is
+    # made: hundreds of hypotheses of a round part with holes hold a million faces
+    fh, ff = np.nonzero(posed.valid)
+    total, limit = len(fh) * face_samples, 8 * count
+    pick = np.sort(rng.choice(total, size=limit, replace=False)) if total > limit else None
+    flat = np.arange(total) if pick is None else pick
+    face, sample = np.divmod(flat, face_samples)
+    owner, f = fh[face], ff[face]
+    start = posed.start[owner, f]
+    pts = start + frac[sample, None] * (posed.end[owner, f] - start)
+    normals = posed.normal[owner, f]
     shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
     q, h = _blocking_pairs(posed, sensor, pts, owner, normals)
     shared[q, posed.cls[h]] = True
@@ -90,11 +96,41 @@ def _blocking_pairs(
     # turn <= n_tol + ANGLE_SLACK with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
     widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
     n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + SHARE_SLACK), 1e-12)))
-    if n_buckets < 3:  # some tolerance spans a third of the directions: every face
+    # points in chunks whose candidate pairs stay under PAIR_CHUNK: a round part with
+    # holes, its rotation still free, pairs every point with a million faces
+    buckets = None if n_buckets < 3 else _Buckets.of(posed, face_angle, n_buckets)
+    per_point = len(fh) if buckets is None else 3 * buckets.sorted_low.shape[1]
+    step = max(1, PAIR_CHUNK // max(1, per_point))
+    found = [
+        _pairs_in(posed, sensor, pts, owner, angle, face_angle, fh, ff, buckets, lo, step)
+        for lo in range(0, len(pts), step)
+    ]
+    if not found:
+        return np.zeros(0, np.int64), np.zeros(0, np.int64)
+    return np.concatenate([q for q, _ in found]), np.concatenate([h for _, h in found])
+
+
+def _pairs_in(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    angle: np.ndarray,
+    face_angle: np.ndarray,
+    fh: np.ndarray,
+    ff: np.ndarray,
+    buckets: _Buckets | None,
+    lo: int,
+    step: int,
+) -> tuple[np.ndarray, np.ndarray]:
+    """The blocking (point, hypothesis) pairs of the points lo .. lo + step."""
+    part = slice(lo, lo + step)
+    pts, owner, angle = pts[part], owner[part], angle[part]
+    if buckets is None:  # some tolerance spans a third of the directions: every face
         q = np.repeat(np.arange(len(pts)), len(fh))
         face = np.tile(np.arange(len(fh)), len(pts))
     else:
-        q, face = _bucket_pairs(posed, sensor, pts, owner, angle, face_angle, n_buckets)
+        q, face = _bucket_pairs(posed, sensor, pts, owner, angle, buckets)
     # the normals first (one gather each), the distances of the pairs they leave
     h, g = fh[face], owner[q]
     n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
@@ -105,7 +141,43 @@ def _blocking_pairs(
     s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
     dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
     ok = dist <= p_tol + LENGTH_SLACK * posed.scale
-    return q[ok], h[ok]
+    return q[ok] + lo, h[ok]
+
+
+@dataclass(frozen=True)
+class _Buckets:
+    """The valid faces in buckets of normal angle, each sorted by its low extent
+    along the bucket's direction (built once, queried per chunk of points)."""
+
+    n_buckets: int
+    width: float
+    used: np.ndarray
+    span: np.ndarray
+    order: np.ndarray
+    first: np.ndarray
+    sorted_low: np.ndarray
+
+    @classmethod
+    def of(cls, posed: PosedSet, face_angle: np.ndarray, n_buckets: int) -> _Buckets:
+        fh, ff = np.nonzero(posed.valid)
+        width = 2 * np.pi / n_buckets
+        bucket = np.floor((face_angle + np.pi) / width).astype(np.int64) % n_buckets
+        centre = (bucket + 0.5) * width - np.pi
+        s, e = posed.start[fh, ff], posed.end[fh, ff]
+        # extent of each face along its bucket's direction n
+        along_s = s[:, 0] * np.cos(centre) + s[:, 1] * np.sin(centre)
+        along_e = e[:, 0] * np.cos(centre) + e[:, 1] * np.sin(centre)
+        low, high = np.minimum(along_s, along_e), np.maximum(along_s, along_e)
+        used, row = np.unique(bucket, return_inverse=True)
+        span = np.zeros(len(used))
+        np.maximum.at(span, row, high - low)
+        order = np.lexsort((low, row))
+        size = np.bincount(row, minlength=len(used))
+        first = np.cumsum(size) - size
+        sorted_low = np.full((len(used), int(size.max())), np.inf)
+        rank = np.arange(len(order)) - first[row[order]]
+        sorted_low[row[order], rank] = low[order]
+        return cls(n_buckets, width, used, span, order, first, sorted_low)
 
 
 def _bucket_pairs(
@@ -114,29 +186,11 @@ def _bucket_pairs(
     pts: np.ndarray,
     owner: np.ndarray,
     angle: np.ndarray,
-    face_angle: np.ndarray,
-    n_buckets: int,
+    buckets: _Buckets,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Candidate (point, face) pairs: same or neighbouring normal-angle bucket, and
     overlapping extents along the bucket's direction (a superset of the blocking pairs)."""
-    fh, ff = np.nonzero(posed.valid)
-    width = 2 * np.pi / n_buckets
-    bucket = np.floor((face_angle + np.pi) / width).astype(np.int64) % n_buckets
-    centre = (bucket + 0.5) * width - np.pi
-    s, e = posed.start[fh, ff], posed.end[fh, ff]
-    # extent of each face along its bucket's direction n
-    along_s = s[:, 0] * np.cos(centre) + s[:, 1] * np.sin(centre)
-    along_e = e[:, 0] * np.cos(centre) + e[:, 1] * np.sin(centre)
-    low, high = np.minimum(along_s, along_e), np.maximum(along_s, along_e)
-    used, row = np.unique(bucket, return_inverse=True)
-    span = np.zeros(len(used))
-    np.maximum.at(span, row, high - low)
-    order = np.lexsort((low, row))
-    size = np.bincount(row, minlength=len(used))
-    first = np.cumsum(size) - size
-    sorted_low = np.full((len(used), int(size.max())), np.inf)
-    rank = np.arange(len(order)) - first[row[order]]
-    sorted_low[row[order], rank] = low[order]
+    width, used, span, n_buckets = buckets.width, buckets.used, buckets.span, buckets.n_buckets
     # the point's bucket and its two neighbours, where used
     mine = np.floor((angle + np.pi) / width).astype(np.int64)
     near = (mine[:, None] + np.array([-1, 0, 1])) % n_buckets  # (Q, 3)
@@ -149,10 +203,10 @@ def _bucket_pairs(
     # within p of the point: 2 eps_d + (eps_t(g) + eps_t(h)) / 2, at most this
     reach = 2 * sensor.position_error + (posed.eps_t[owner[qi]] + posed.eps_t.max()) / 2
     reach = reach + 2e-9 * posed.scale
-    lo = sorted_count(sorted_low, b, x - reach - span[b], "left")
-    hi = sorted_count(sorted_low, b, x + reach, "right")
+    lo = sorted_count(buckets.sorted_low, b, x - reach - span[b], "left")
+    hi = sorted_count(buckets.sorted_low, b, x + reach, "right")
     count = hi - lo
     q = np.repeat(qi, count)
     at = np.arange(len(q)) - np.repeat(np.cumsum(count) - count, count)
-    face = order[first[np.repeat(b, count)] + np.repeat(lo, count) + at]
+    face = buckets.order[buckets.first[np.repeat(b, count)] + np.repeat(lo, count) + at]
     return q, face

@@ -413,3 +413,25 @@ def test_a_path_across_a_slide_family_pins_it():
             assert p_side < 1.0
         # a touch parallel to the one made pins nothing
         assert f.info.p_distinguishing[i_down] < 1.0
+
+
+@pytest.mark.parametrize("name", ["workshop", "curved"])
+def test_boundary_aims_are_the_same_whatever_the_pair_chunk(name, monkeypatch):
+    """The (point, face) pairs go in chunks of points so that a round part with holes
+    never holds them all; the aims must not depend on the chunk."""
+    from planner.planning import boundary_aims as module
+    from planner.planning.posed_set import pose_hypotheses
+    from planner.recognition.session import Session
+    from tests.conftest import WORKSPACE, object_set
+
+    models = [m for m in object_set(name) if m.name != "cam"]
+    session = Session(models, SensorBounds(1, 0.05), WORKSPACE).observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -30), (0, -1)))
+    )
+    posed = pose_hypotheses(session.hypotheses, session.models_by_name)
+    whole = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
+    monkeypatch.setattr(module, "PAIR_CHUNK", 50)
+    chunked = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
+    assert len(whole[0]) > 0
+    np.testing.assert_array_equal(whole[0], chunked[0])
+    np.testing.assert_array_equal(whole[1], chunked[1])
