@@ -283,7 +283,8 @@ def session_picture(
         "workspace": session.workspace,
         "sensor_position": sensor_position,
         "paths": [p.path for p in ranked],
-        "p_distinguishing": [p.p_distinguishing for p in ranked],
+        # no hypotheses, no P(DM) to show (the opening probe)
+        "p_distinguishing": [p.p_distinguishing if hyps else None for p in ranked],
         "title": title,
     }
     r = session.sensor.tip_radius

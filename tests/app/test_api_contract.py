@@ -459,6 +459,7 @@ def test_pictures_svg_and_png(client):
     first = client.get(f"{url}/image.svg")
     assert first.status_code == 200 and b"safe-circle" in first.content
     assert b"path-1" in first.content and b"outline-0" not in first.content
+    assert b"P(DM)" not in first.content  # nothing to distinguish yet
     client.post(f"{url}/observations", json=BOTTOM)
     svg = client.get(f"{url}/image.svg")
     assert svg.status_code == 200 and svg.headers["content-type"].startswith("image/svg+xml")

@@ -124,6 +124,7 @@ def test_a_session_without_hypotheses_is_drawn_as_its_scene(touches):
     svg = session_picture(session, (50, 0), fmt="svg")
     assert b'id="safe-circle"' in svg and b'id="sensor"' in svg
     assert (b'id="contact-1"' in svg) == (touches == 2) and b"outline-0" not in svg
+    assert b"P(DM)" not in svg  # nothing to distinguish yet
 
 
 def test_matplotlib_is_lazy_and_pyplot_never_loaded():
