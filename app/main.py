@@ -61,7 +61,7 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
         synchronous=settings.sqlite_synchronous,
         pool_size=settings.db_pool_size,
     )
-    service = SessionService(settings, store)
+    service = SessionService(settings, store, app.state.inputs)
     before = await service.run_db(store.open)
     app.state.service = service
     log.info(
@@ -146,7 +146,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
     app.state.settings = settings
     app.state.service = None
     install_error_handlers(app)
-    inputs = input_models(settings)
+    inputs = app.state.inputs = input_models(settings)
     for module in (objects, sessions, observations, plan, pictures, viewer, health):
         app.include_router(module.build_router(inputs, settings))
     install_metrics(app)

@@ -24,19 +24,18 @@ _SESSION_OPERATIONS = (
 _VERSIONED = ("undo_observation", "delete_session")
 
 
-def _session_links(etag: bool) -> dict[str, Any]:
+def _session_links() -> dict[str, Any]:
     ident = {"session_id": "$response.body#/id"}
     links = {
         op: {"operationId": op, "parameters": ident, "description": f"{op} on this session"}
         for op in _SESSION_OPERATIONS
     }
-    if etag:
-        for op in _VERSIONED:
-            links[op] = {
-                "operationId": op,
-                "parameters": {**ident, "header.If-Match": "$response.header.ETag"},
-                "description": f"{op} at the version this answer is at",
-            }
+    for op in _VERSIONED:
+        links[op] = {
+            "operationId": op,
+            "parameters": {**ident, "header.If-Match": "$response.header.ETag"},
+            "description": f"{op} at the version this answer is at",
+        }
     return links
 
 
@@ -56,10 +55,11 @@ def add_links(schema: dict[str, Any]) -> dict[str, Any]:
         for op in item.values()
         if isinstance(op, dict) and "operationId" in op
     }
+    session = _session_links()
     wanted = {
-        "create_session": (("201",), _session_links(etag=True)),
-        "add_observation": (("201",), _session_links(etag=True)),
-        "get_session": (("200",), _session_links(etag=True)),
+        "create_session": (("201",), session),
+        "add_observation": (("201",), session),
+        "get_session": (("200",), session),
         "create_object": (("201", "200"), _object_links()),
         "import_mesh": (("201", "200"), _object_links()),
     }

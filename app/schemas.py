@@ -57,9 +57,9 @@ Status = Literal["awaiting_contact", "ambiguous", "localized", "inconsistent"]
 StrategyName = Literal[STRATEGIES]  # type: ignore[valid-type]
 #: The planner refuses normal error bounds of pi/4 or more (radians).
 MAX_NORMAL_ERROR = math.pi / 4
-#: Object names: what the object files allow, less '/' and control characters (URL paths).
 #: Content-Types a mesh upload may carry besides model/* (none a browser sends unasked).
 MESH_MEDIA_TYPES = ("application/octet-stream", "application/sla", "application/vnd.ms-pki.stl")
+#: Object names: what the object files allow, less '/' and control characters (URL paths).
 NAME_PATTERN = r"^[^/\x00-\x1f\x7f]*[^/\s\x00-\x1f\x7f][^/\x00-\x1f\x7f]*$"
 
 Vec2Out = Annotated[list[float], Field(min_length=2, max_length=2)]

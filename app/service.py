@@ -55,7 +55,7 @@ from app.errors import (
     UnavailableError,
 )
 from app.mesh_upload import mesh_object
-from app.schemas import input_models
+from app.schemas import InputModels
 from app.session_config import resolve_models, session_config
 from app.settings import Settings
 from app.store import Store
@@ -95,10 +95,10 @@ class Answer:
 class SessionService:
     """Sessions over a :class:`Store`, with the planner doing the work in threads."""
 
-    def __init__(self, settings: Settings, store: Store) -> None:
+    def __init__(self, settings: Settings, store: Store, inputs: InputModels) -> None:
         self.settings = settings
         self.store = store
-        self.inputs = input_models(settings)
+        self.inputs = inputs
         self.cpu = anyio.CapacityLimiter(settings.cpu_workers)
         self.db = anyio.CapacityLimiter(settings.db_pool_size)
         self.light = anyio.CapacityLimiter(settings.cpu_workers)
@@ -158,7 +158,8 @@ class SessionService:
             )
         return Answer(stored.status, stored.body, dict(stored.headers), replayed=True)
 
-    async def _record(self, session_id: str) -> SessionRecord:
+    async def record(self, session_id: str) -> SessionRecord:
+        """The stored session (one read, nothing derived); 404 when there is none."""
         record = await self.run_db(self.store.get_session, session_id)
         if record is None:
             raise NotFoundError(f"no session {session_id}", field="id")
@@ -255,7 +256,7 @@ class SessionService:
 
     async def get_session(self, session_id: str, limit: int | None) -> Answer:
         async with self.locks.hold(session_id):
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             session = await self._session(record)
         body = await self.run_light(
             session_json, session_id, record.version, record.config, session, limit
@@ -284,7 +285,7 @@ class SessionService:
                 if old:
                     return self._replay(old, fp)
                 for _ in range(_CAS_ATTEMPTS):
-                    record = await self._record(session_id)
+                    record = await self.record(session_id)
                     if not if_match_ok(if_match, record.version):
                         raise PreconditionFailedError(
                             f"session is at version {record.version} ({etag(record.version)})",
@@ -374,7 +375,7 @@ class SessionService:
 
     async def delete_session(self, session_id: str, if_match: str | None) -> None:
         async with self.locks.hold(session_id):
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             if not if_match_ok(if_match, record.version):
                 raise PreconditionFailedError(
                     f"session is at version {record.version}",
@@ -427,7 +428,7 @@ class SessionService:
         self, session_id: str, limit: int, position: tuple[float, float] | None = None
     ) -> Answer:
         async with self.locks.hold(session_id):  # the state only; the plan is computed after
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             session = await self._session(record)
         result = await self._plan(record, session, position)
         body = plan_json(result, record.version, limit)
@@ -435,7 +436,7 @@ class SessionService:
 
     async def picture(self, session_id: str, kind: str, view: str, dpi: int) -> Answer:
         async with self.locks.hold(session_id):  # the state only: observations go on
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             key = (session_id, record.version, kind, view, dpi)
             image = self.pictures.get(key)
             if image is None:
@@ -452,7 +453,7 @@ class SessionService:
         from planner.report import report_csv, session_report
 
         async with self.locks.hold(session_id):
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             session = await self._session(record)
         data = await self.run_light(session_report, session)
         headers = {"ETag": etag(record.version)}
@@ -467,7 +468,7 @@ class SessionService:
         from app.viewer import mii_json
 
         async with self.locks.hold(session_id):  # the state only: observations go on
-            record = await self._record(session_id)
+            record = await self.record(session_id)
             key = (session_id, record.version, "json")
             body = self.pictures.get(key)
             if body is None:

@@ -45,7 +45,7 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         """A self-contained page drawing the MII, the planned paths and the hypotheses;
         it refreshes while the session changes. With an API key, open it through a
         viewer link (POST .../view-link)."""
-        await service.image_json(str(session_id))  # 404 for an unknown session
+        await service.record(str(session_id))  # 404 for an unknown session
         return HTMLResponse(VIEW_HTML, headers={"Content-Security-Policy": VIEW_CSP})
 
     @router.post("/view-link", response_model=ViewLinkOut)
@@ -55,7 +55,7 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         `view_link_ttl_s`. Without an API key the page needs no link: 409."""
         if config.api_key is None:
             raise ConflictError("the service has no API key: open .../view directly", field="id")
-        await service.image_json(str(session_id))  # 404 for an unknown session
+        await service.record(str(session_id))  # 404 for an unknown session
         expires = int(time.time() + config.view_link_ttl_s)
         token = make_token(config.api_key.get_secret_value(), str(session_id), expires)
         url = f"/v1/sessions/{session_id}/view?token={quote(token, safe='')}"

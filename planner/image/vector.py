@@ -122,9 +122,13 @@ def drawable(
     (1, 2)
     """
     models = model_map(models)
-    faces = np.array(
-        [len(models[h.object].stable_poses[h.stable_pose].faces.start) for h in hypotheses]
-    )
+    # faces per stable pose: one per vertex of its outline and holes
+    per_pose = {
+        (m.name, k): len(p.outline) + sum(len(r) for r in p.holes)
+        for m in models.values()
+        for k, p in enumerate(m.stable_poses)
+    }
+    faces = np.array([per_pose[h.object, h.stable_pose] for h in hypotheses], dtype=np.int64)
     fit = int(np.searchsorted(np.cumsum(faces), max_faces, side="right"))
     return tuple(hypotheses[: max(fit, min(1, len(hypotheses)))])
 

@@ -48,8 +48,10 @@ def boundary_aims(
     # made: hundreds of hypotheses of a round part with holes hold a million faces
     fh, ff = np.nonzero(posed.valid)
     total, limit = len(fh) * face_samples, 8 * count
-    pick = np.sort(rng.choice(total, size=limit, replace=False)) if total > limit else None
-    flat = np.arange(total) if pick is None else pick
+    if total > limit:
+        flat = np.sort(rng.choice(total, size=limit, replace=False))
+    else:
+        flat = np.arange(total)
     face, sample = np.divmod(flat, face_samples)
     owner, f = fh[face], ff[face]
     start = posed.start[owner, f]
