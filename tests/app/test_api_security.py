@@ -53,7 +53,7 @@ def test_every_answer_is_nosniff_and_inert_but_the_viewer_runs_its_own_script(cl
     assert VIEW_HTML.count("<script>") == 1 and VIEW_HTML.count("<style>") == 1
 
 
-def test_the_policy_hash_follows_the_page_script(monkeypatch):
+def test_the_policy_hash_follows_the_page_script():
     """The hash is computed from the page: a changed script gets a changed hash."""
     import app.viewer as viewer
 
