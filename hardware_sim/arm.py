@@ -103,6 +103,7 @@ def slide_off_vertex(
     direction: np.ndarray,
     zone: float,
     rng: np.random.Generator,
+    height: float | None = None,
 ) -> tuple[np.ndarray, int]:
     """Where a compliant tip comes to rest after hitting `face` at `point` (world).
 
@@ -110,12 +111,13 @@ def slide_off_vertex(
     with probability ``|d.n_B| / (|d.n_A| + |d.n_B|) (1 - s / zone)`` (s the
     distance to the vertex, d the path direction), resting at a distance uniform
     in [0, zone] from the vertex along that face; otherwise it stays. A face that
-    turns away from the path (d.n_B >= 0) cannot catch the tip. Returns the rest
-    point and its face index.
+    turns away from the path (d.n_B >= 0) cannot catch the tip. Faces are those
+    of the layer at the path's probing `height`. Returns the rest point and its
+    face index.
     """
     if zone <= 0:
         return point, face
-    start, end, normal = world.posed_faces()
+    start, end, normal = world.posed_faces(height)
     for vertex, neighbour_end in ((start[face], "end"), (end[face], "start")):
         s = float(np.hypot(*(point - vertex)))
         if s > zone:
@@ -255,8 +257,10 @@ class SimulatedArm:
         self._moved(approach / p.approach_speed)
         if ball:
             point = stop[1]  # the surface point the ball touches
-        point, face = slide_off_vertex(self.world, point, face, d, p.vertex_zone, self.rng)
-        normal = self.world.posed_faces()[2][face]
+        point, face = slide_off_vertex(
+            self.world, point, face, d, p.vertex_zone, self.rng, path.height
+        )
+        normal = self.world.posed_faces(path.height)[2][face]
         contact, extra, deflection = self._touch(point, normal, d)
         # the hand went `deflection` past the contact; retreat along the path to its origin
         distance += extra + 2 * deflection + approach

@@ -46,20 +46,30 @@ class World:
     def stable(self) -> StablePose:
         return self.model.stable_poses[self.pose_index]
 
-    def posed_faces(self) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        """World face starts, ends and outward normals."""
-        faces = self.stable.faces
+    def posed_faces(self, height: float | None = None) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        """World face starts, ends and outward normals of the outline at probing
+        `height` (None: the default height)."""
+        faces = self.stable.layer(height).faces
         rot = self.pose.rotation()
         return self.pose.apply(faces.start), self.pose.apply(faces.end), faces.normal @ rot.T
 
-    def polygon(self) -> shapely.Polygon:
+    def polygon(self, height: float | None = None) -> shapely.Polygon:
+        """The posed outline at probing `height` (None: the default height)."""
+        layer = self.stable.layer(height)
         return shapely.Polygon(
-            self.pose.apply(self.stable.outline), [self.pose.apply(h) for h in self.stable.holes]
+            self.pose.apply(layer.outline), [self.pose.apply(h) for h in layer.holes]
         )
 
+    def face_offset(self, height: float | None) -> int:
+        """Where the faces of the layer at `height` start in the stable pose's
+        `all_faces` (what the recognition's assignments index)."""
+        k = self.stable.layer_index(height)
+        return sum(len(p.faces) for p in self.stable.layers[:k])
+
     def first_contact(self, path: SensingPath) -> tuple[np.ndarray, int] | None:
-        """Exact first contact point and face index along `path`, or None on a miss."""
-        start, end, _ = self.posed_faces()
+        """Exact first contact point and face index (of the layer at the path's
+        height) along `path`, or None on a miss."""
+        start, end, _ = self.posed_faces(path.height)
         origin, direction = np.asarray(path.origin), np.asarray(path.direction)
         dist, face = cast_rays(
             origin[None], direction[None], np.array([path.length]), start[None], end[None]
@@ -79,7 +89,7 @@ class World:
         the path pushes against most (DESIGN §5: vertex contacts slide onto a
         face): it rests touching the vertex, centred on that face's normal.
         """
-        start, end, normal = self.posed_faces()
+        start, end, normal = self.posed_faces(path.height)
         hit = cast_ball(path.origin, path.direction, path.length, start, end, normal, radius)
         if hit is None:
             return None
@@ -106,7 +116,8 @@ class World:
 
         With `edge_share` > 0, that share of the perturbations lies exactly on the
         bounds' edges (|position error| = eps_d, |normal error| = phi), the worst
-        case for soundness tests. Returns the observation and the true face index.
+        case for soundness tests. Returns the observation and the true face index
+        (among the stable pose's `all_faces`, as the recognition's assignments).
         """
         bounds = bounds or SensorBounds()
         r = bounds.tip_radius
@@ -126,10 +137,10 @@ class World:
         point = point + radius * np.array([math.cos(a), math.sin(a)])
         on_edge = rng.random() < edge_share
         delta = phi * rng.choice([-1.0, 1.0]) if on_edge else rng.uniform(-phi, phi)
-        normal = self.posed_faces()[2][face]
+        normal = self.posed_faces(path.height)[2][face]
         angle = math.atan2(normal[1], normal[0]) + delta
         contact = Contact((float(point[0]), float(point[1])), (math.cos(angle), math.sin(angle)))
-        return Observation(path, contact), face
+        return Observation(path, contact), face + self.face_offset(path.height)
 
     def hitting_path(self, rng: np.random.Generator) -> SensingPath:
         """A path from a random point of the safe circle aimed at a random point of the object."""

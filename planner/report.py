@@ -75,12 +75,10 @@ def _finite(x: float) -> float | None:
 
 def _residuals(session: Session, best: Hypothesis | None) -> list[dict[str, Any]]:
     touches: list[dict[str, Any]] = []
-    stable = faces = material = None
+    stable = faces = None
     if best is not None:
         stable = session.models_by_name[best.object].stable_poses[best.stable_pose]
-        faces = stable.faces
-        rings = [best.pose.apply(r) for r in (stable.outline, *stable.holes)]
-        material = shapely.Polygon(rings[0], rings[1:])
+        faces = stable.all_faces  # assignments index every layer's faces
     contact_no = 0
     for i, obs in enumerate(session.observations):
         row: dict[str, Any] = {
@@ -89,6 +87,7 @@ def _residuals(session: Session, best: Hypothesis | None) -> list[dict[str, Any]
                 "origin": [float(v) for v in obs.path.origin],
                 "direction": [float(v) for v in obs.path.direction],
                 "length": float(obs.path.length),
+                "height": obs.path.height,
             },
             "contact": None,
             "face": None,
@@ -98,8 +97,10 @@ def _residuals(session: Session, best: Hypothesis | None) -> list[dict[str, Any]
         }
         if obs.contact is None:
             row["kind"] = "miss"
-            if material is not None:
-                row["clearance"] = _clearance(obs, material)
+            if best is not None and stable is not None:
+                layer = stable.layer(obs.path.height)  # the outline at the path's height
+                rings = [best.pose.apply(r) for r in (layer.outline, *layer.holes)]
+                row["clearance"] = _clearance(obs, shapely.Polygon(rings[0], rings[1:]))
         else:
             c = obs.contact
             row["contact"] = {

@@ -39,6 +39,9 @@ __all__ = [
 
 Vec2 = tuple[float, float]
 
+#: Relative tolerance within which a path's height names a slice's height.
+HEIGHT_TOLERANCE = 1e-6
+
 
 def _finite_vec(value: Sequence[float], name: str) -> Vec2:
     try:
@@ -200,17 +203,24 @@ class Workspace:
 
 @dataclass(frozen=True)
 class SensingPath:
-    """A straight sensing path: from `origin` along the unit `direction` for `length`."""
+    """A straight sensing path: from `origin` along the unit `direction` for `length`,
+    at probing `height` above the table (DESIGN §4.13; None: the default height,
+    where each stable pose's first slice was cut)."""
 
     origin: Vec2
     direction: Vec2
     length: float
+    height: float | None = None
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "origin", _finite_vec(self.origin, "path.origin"))
         object.__setattr__(self, "direction", _unit_vec(self.direction, "path.direction"))
         if not math.isfinite(self.length) or self.length <= 0:
             raise InvalidObservationError("must be a finite number > 0", field="path.length")
+        if self.height is not None:
+            if not math.isfinite(self.height):
+                raise InvalidObservationError("must be a finite number", field="path.height")
+            object.__setattr__(self, "height", float(self.height))
 
     def point_at(self, distance: float) -> np.ndarray:
         return np.asarray(self.origin) + distance * np.asarray(self.direction)
@@ -293,16 +303,86 @@ class StablePose:
     Build it with :func:`planner.models.outlines.make_stable_pose`, which validates and
     orients the rings; `normal_z` (one value per face, or None) is the
     out-of-plane normal component of the 3-D face each outline face was cut from.
+
+    Probing heights (DESIGN §4.13): the outline is the slice at `height` (None: a
+    prism, the same outline at every height), and `slices` are the pose's
+    outlines at other heights, each a StablePose of its own without slices.
+    Layer 0 is this outline, layer k the k-th slice; `faces` are layer 0's, and
+    `all_faces` every layer's in layer order (what the interpretation tree
+    assigns contacts to, `face_layer` saying whose each face is).
     """
 
     outline: np.ndarray
     holes: tuple[np.ndarray, ...] = ()
     probability: float = 1.0
     normal_z: np.ndarray | None = None
+    height: float | None = None
+    slices: tuple[StablePose, ...] = ()
 
     @cached_property
     def faces(self) -> Faces:
         return Faces(**geometry.ring_faces([self.outline, *self.holes]))
+
+    @property
+    def layers(self) -> tuple[StablePose, ...]:
+        """The outline at each probing height: this one, then the slices."""
+        return (self, *self.slices)
+
+    @property
+    def heights(self) -> tuple[float, ...] | None:
+        """The heights of the layers, or None for a prism (any height)."""
+        if self.height is None:
+            return None
+        return tuple(float(p.height) for p in self.layers)  # type: ignore[arg-type]
+
+    def layer_index(self, height: float | None) -> int:
+        """Which layer a path at `height` meets (None: the default, layer 0).
+        Refuses a height the pose has no slice at."""
+        heights = self.heights
+        if height is None or heights is None:
+            return 0
+        for k, z in enumerate(heights):
+            if abs(z - height) <= HEIGHT_TOLERANCE * max(1.0, abs(z)):
+                return k
+        raise InvalidObservationError(
+            f"no slice at height {height:g} (this object's: {', '.join(f'{z:g}' for z in heights)})",
+            field="path.height",
+        )
+
+    def layer(self, height: float | None) -> StablePose:
+        """The outline a path at `height` meets, as a StablePose without slices."""
+        return self.layers[self.layer_index(height)]
+
+    @cached_property
+    def all_faces(self) -> Faces:
+        if not self.slices:
+            return self.faces
+        parts = [p.faces for p in self.layers]
+        rings = np.cumsum([0] + [int(f.ring.max()) + 1 for f in parts[:-1]])
+        merged = {
+            name: np.concatenate([getattr(f, name) for f in parts])
+            for name in ("start", "end", "normal", "offset", "length", "angle")
+        }
+        merged["ring"] = np.concatenate([f.ring + r for f, r in zip(parts, rings, strict=True)])
+        return Faces(**merged)
+
+    @cached_property
+    def face_layer(self) -> np.ndarray:
+        """(F_all,) the layer of each of `all_faces`."""
+        return np.concatenate([np.full(len(p.faces), k) for k, p in enumerate(self.layers)])
+
+    @cached_property
+    def all_normal_z(self) -> np.ndarray | None:
+        """`normal_z` over `all_faces` (None unless every layer has it)."""
+        if any(p.normal_z is None for p in self.layers):
+            return None
+        return np.concatenate([p.normal_z for p in self.layers])  # type: ignore[misc]
+
+    @cached_property
+    def extent(self) -> np.ndarray:
+        """The outer vertices of every layer (model frame): what bounds how far any
+        point of the pose lies from a reference point."""
+        return np.concatenate([p.outline for p in self.layers])
 
     @cached_property
     def centroid(self) -> np.ndarray:
@@ -311,13 +391,13 @@ class StablePose:
 
     @cached_property
     def radius(self) -> float:
-        """Distance of the farthest vertex from the model origin."""
-        return float(np.max(np.hypot(*self.outline.T)))
+        """Distance of the farthest vertex (of any layer) from the model origin."""
+        return float(np.max(np.hypot(*self.extent.T)))
 
     @cached_property
     def centroid_radius(self) -> float:
-        """Distance of the farthest vertex from the centroid."""
-        return float(np.max(np.hypot(*(self.outline - self.centroid).T)))
+        """Distance of the farthest vertex (of any layer) from the centroid."""
+        return float(np.max(np.hypot(*(self.extent - self.centroid).T)))
 
     @cached_property
     def shape(self):  # shapely.Polygon, built lazily
@@ -327,6 +407,10 @@ class StablePose:
 
     def coordinates_equal(self, other: StablePose, tol: float = 0.0) -> bool:
         if self.outline.shape != other.outline.shape or len(self.holes) != len(other.holes):
+            return False
+        if self.heights != other.heights or not all(
+            a.coordinates_equal(b, tol) for a, b in zip(self.slices, other.slices, strict=True)
+        ):
             return False
         rings = zip([self.outline, *self.holes], [other.outline, *other.holes], strict=True)
         return all(a.shape == b.shape and np.allclose(a, b, atol=tol, rtol=0) for a, b in rings)

@@ -3,7 +3,10 @@
 Format: ``{"objects": [{"name": ..., "stable_poses": [{"outline": [[x, y], ...],
 "holes": [[[x, y], ...]], "probability": p, "normal_z": [...]}], "prior": w}]}``;
 an object with a plain ``"outline"`` (and optional ``"holes"``) is shorthand for
-one stable pose of probability 1. Coordinates are kept exactly as given.
+one stable pose of probability 1. A stable pose probed at several heights gives
+``"slices": [{"height": z, "outline": ..., "holes": ..., "normal_z": ...}, ...]``
+instead of its outline, the first slice at the default height (DESIGN §4.13).
+Coordinates are kept exactly as given.
 """
 
 from __future__ import annotations
@@ -17,8 +20,8 @@ from pathlib import Path
 from typing import Any
 
 from planner.errors import InvalidModelError, ModelFileError
-from planner.models.outlines import make_stable_pose
-from planner.types import ObjectModel
+from planner.models.outlines import make_stable_pose, with_slices
+from planner.types import ObjectModel, StablePose
 
 __all__ = [
     "dump_objects",
@@ -31,7 +34,8 @@ __all__ = [
 ]
 
 _OBJECT_KEYS = {"name", "outline", "holes", "stable_poses", "prior", "normal_z", "probability"}
-_POSE_KEYS = {"outline", "holes", "probability", "normal_z"}
+_POSE_KEYS = {"outline", "holes", "probability", "normal_z", "slices"}
+_SLICE_KEYS = {"height", "outline", "holes", "normal_z"}
 
 
 def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
@@ -65,26 +69,34 @@ def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
         pose_field = [f"{field}.stable_poses[{i}]" for i in range(len(poses_data))]
     poses = []
     for pose_data, pf in zip(poses_data, pose_field, strict=True):
-        if not isinstance(pose_data, Mapping) or "outline" not in pose_data:
-            raise ModelFileError("must be an object with an 'outline'", field=pf)
+        if not isinstance(pose_data, Mapping) or ("outline" in pose_data) == (
+            "slices" in pose_data
+        ):
+            raise ModelFileError("must be an object with an 'outline' or 'slices'", field=pf)
         unknown = set(pose_data) - _POSE_KEYS
         if unknown:
             raise ModelFileError(f"unknown keys {sorted(unknown)}", field=pf)
-        holes = pose_data.get("holes", [])
-        if not isinstance(holes, list):
-            raise ModelFileError("must be a list of rings", field=f"{pf}.holes")
         probability = pose_data.get("probability", 1.0)
         if isinstance(probability, bool) or not isinstance(probability, int | float):
             raise ModelFileError("must be a number", field=f"{pf}.probability")
-        poses.append(
-            make_stable_pose(
-                pose_data["outline"],
-                holes,
-                float(probability),
-                pose_data.get("normal_z"),
-                field=f"{pf}.outline",
-            )
-        )
+        if "outline" in pose_data:
+            poses.append(_outline(pose_data, float(probability), pf))
+            continue
+        slices = pose_data["slices"]
+        if not isinstance(slices, list) or not slices:
+            raise ModelFileError("must be a non-empty list", field=f"{pf}.slices")
+        layers = []
+        for k, sl in enumerate(slices):
+            sf = f"{pf}.slices[{k}]"
+            if not isinstance(sl, Mapping) or not {"height", "outline"} <= set(sl):
+                raise ModelFileError("must be an object with 'height' and 'outline'", field=sf)
+            if set(sl) - _SLICE_KEYS:
+                raise ModelFileError(f"unknown keys {sorted(set(sl) - _SLICE_KEYS)}", field=sf)
+            z = sl["height"]
+            if isinstance(z, bool) or not isinstance(z, int | float):
+                raise ModelFileError("must be a number", field=f"{sf}.height")
+            layers.append((float(z), _outline(sl, float(probability), sf)))
+        poses.append(with_slices(layers, field=f"{pf}.slices"))
     total = sum(p.probability for p in poses)
     if total > 1 + 1e-6:
         raise InvalidModelError(
@@ -103,16 +115,33 @@ def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
     )
 
 
+def _outline(data: Mapping[str, Any], probability: float, field: str) -> StablePose:
+    holes = data.get("holes", [])
+    if not isinstance(holes, list):
+        raise ModelFileError("must be a list of rings", field=f"{field}.holes")
+    return make_stable_pose(
+        data["outline"], holes, probability, data.get("normal_z"), field=f"{field}.outline"
+    )
+
+
+def _rings(pose: StablePose) -> dict[str, Any]:
+    entry: dict[str, Any] = {"outline": pose.outline.tolist()}
+    if pose.holes:
+        entry["holes"] = [h.tolist() for h in pose.holes]
+    if pose.normal_z is not None:
+        entry["normal_z"] = pose.normal_z.tolist()
+    return entry
+
+
 def object_to_dict(obj: ObjectModel) -> dict[str, Any]:
     """The §8 dictionary of one object (always in the `stable_poses` form)."""
     poses = []
     for pose in obj.stable_poses:
-        entry: dict[str, Any] = {"outline": pose.outline.tolist(), "probability": pose.probability}
-        if pose.holes:
-            entry["holes"] = [h.tolist() for h in pose.holes]
-        if pose.normal_z is not None:
-            entry["normal_z"] = pose.normal_z.tolist()
-        poses.append(entry)
+        if pose.height is None:
+            entry = _rings(pose)
+        else:
+            entry = {"slices": [{"height": p.height, **_rings(p)} for p in pose.layers]}
+        poses.append({**entry, "probability": pose.probability})
     out: dict[str, Any] = {"name": obj.name, "stable_poses": poses}
     if obj.prior is not None:
         out["prior"] = obj.prior

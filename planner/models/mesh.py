@@ -38,7 +38,7 @@ import trimesh
 from planner.errors import InvalidModelError, ModelFileError
 from planner.geometry import point_segment_distance, polygon_centroid, signed_area
 from planner.models.mesh_limits import MeshLimits
-from planner.models.outlines import make_stable_pose
+from planner.models.outlines import make_stable_pose, with_slices
 from planner.types import ObjectModel
 
 __all__ = [
@@ -377,8 +377,11 @@ def object_from_mesh(
     *,
     seed: int = 0,
     limits: MeshLimits | None = None,
+    heights: Sequence[float] = (),
 ) -> ObjectModel:
-    """The object model of a solid standing on a table, probed at `height`.
+    """The object model of a solid standing on a table, probed at `height`, and
+    at each of `heights` as well (DESIGN §4.13: slices at several heights, the
+    first at `height`, the default).
 
     Computes the stable poses and their probabilities, slices each at `height`
     (mesh units above the table), merges poses whose slices are congruent
@@ -390,6 +393,10 @@ def object_from_mesh(
     :class:`~planner.errors.InvalidModelError` naming the field (`mesh`,
     `height`, `name`, `max_poses`) when an input cannot give a model. `limits`
     bound the work before it is done (:class:`MeshLimits`; None: unbounded).
+    With `heights`, every kept pose is also sliced there, in the model frame of
+    its slice at `height`; poses are then not merged (equal poses give one
+    equivalence class in a session all the same), and a height above some pose's
+    top is refused.
 
     >>> box = trimesh.creation.box((40, 60, 100))
     >>> model = object_from_mesh(box, 8.0, "box", max_poses=2)
@@ -397,6 +404,7 @@ def object_from_mesh(
     [[60.0, 100.0], [40.0, 100.0]]
     """
     height = _check_height(height)
+    extra = _extra_heights(height, heights)
     if not isinstance(name, str) or not name.strip() or len(name) > 200:
         raise InvalidModelError(
             "must be a non-empty string of at most 200 characters", field="name"
@@ -420,10 +428,16 @@ def object_from_mesh(
             split.append(exc)
     if not slices:
         raise split[0]
+    upper = {i: [slice_pose(checked, transforms[i], z, pose=i) for z in extra] for i in slices}
+
+    def same(a: int, b: int) -> bool:
+        # with several heights, poses stay apart (congruent at one height is not at all)
+        return not extra and congruent(slices[a], slices[b])
+
     # group congruent slices; the first (most probable) of a group represents it
     groups: list[list[int]] = []
-    for i, piece in slices.items():
-        home = next((g for g in groups if congruent(slices[g[0]], piece)), None)
+    for i in slices:
+        home = next((g for g in groups if same(g[0], i)), None)
         if home is None:
             groups.append([i])
         else:
@@ -434,17 +448,42 @@ def object_from_mesh(
     kept = merged[order] / merged[order].sum()
     poses = []
     for k, (g, probability) in enumerate(zip(order, kept, strict=True)):
-        representative = slices[groups[g][0]]
-        poses.append(
-            make_stable_pose(
-                representative.outline,
-                representative.holes,
-                float(min(probability, 1.0)),
-                representative.normal_z.tolist(),
-                field=f"stable_poses[{k}].outline",
-            )
+        first = groups[g][0]
+        representative = slices[first]
+        pose = make_stable_pose(
+            representative.outline,
+            representative.holes,
+            float(min(probability, 1.0)),
+            representative.normal_z.tolist(),
+            field=f"stable_poses[{k}].outline",
         )
+        if extra:
+            # every layer in the frame of the default slice: p + offset is the posed point
+            shift = [u.offset - representative.offset for u in upper[first]]
+            layers = [
+                make_stable_pose(
+                    u.outline + s, [h + s for h in u.holes], pose.probability,
+                    u.normal_z.tolist(), field=f"stable_poses[{k}].slices[{j + 1}].outline",
+                )
+                for j, (u, s) in enumerate(zip(upper[first], shift, strict=True))
+            ]  # fmt: skip
+            pose = with_slices(
+                [(height, pose), *zip(extra, layers, strict=True)],
+                field=f"stable_poses[{k}].slices",
+            )
+        poses.append(pose)
     return ObjectModel(name=name, stable_poses=tuple(poses))
+
+
+def _extra_heights(height: float, heights: Sequence[float]) -> list[float]:
+    """The probing heights besides the default one, checked, in the order given."""
+    out: list[float] = []
+    for z in heights:
+        value = _check_height(z)
+        if all(abs(value - other) > 1e-6 * max(1.0, other) for other in [height, *out]):
+            out.append(value)
+    return out
+
 
 
 def import_mesh_bytes(
@@ -454,6 +493,7 @@ def import_mesh_bytes(
     name: str,
     max_poses: int | None = None,
     limits: MeshLimits | None = None,
+    heights: Sequence[float] = (),
 ) -> ObjectModel:
     """Decode a mesh held in memory (an HTTP upload) and build its object model.
 
@@ -464,4 +504,4 @@ def import_mesh_bytes(
     """
     height = _check_height(height)
     mesh = parse_mesh_bytes(data, file_type)
-    return object_from_mesh(mesh, height, name, max_poses, limits=limits)
+    return object_from_mesh(mesh, height, name, max_poses, limits=limits, heights=heights)

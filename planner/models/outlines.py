@@ -16,7 +16,7 @@ from planner.errors import InvalidModelError
 from planner.geometry import signed_area
 from planner.types import StablePose
 
-__all__ = ["EDGE_TOLERANCE", "make_stable_pose"]
+__all__ = ["EDGE_TOLERANCE", "make_stable_pose", "with_slices"]
 
 #: Relative tolerance (of the outline's size) below which an edge is degenerate.
 EDGE_TOLERANCE = 1e-6
@@ -100,3 +100,31 @@ def make_stable_pose(
     return StablePose(
         outline=ring, holes=tuple(hole_rings), probability=float(probability), normal_z=nz
     )
+
+
+def with_slices(
+    layers: Sequence[tuple[float, StablePose]], *, field: str = "slices"
+) -> StablePose:
+    """One stable pose probed at several heights (DESIGN §4.13): `layers` are
+    (height, outline) pairs, the first the default height's; the outlines come
+    from :func:`make_stable_pose`, the first one's probability is the pose's.
+    Refuses non-finite or repeated heights, naming the field."""
+    if not layers:
+        raise InvalidModelError("needs at least one slice", field=field)
+    seen: list[float] = []
+    built = []
+    for k, (height, pose) in enumerate(layers):
+        z = float(height)
+        if not math.isfinite(z):
+            raise InvalidModelError("must be a finite number", field=f"{field}[{k}].height")
+        if any(abs(z - other) <= 1e-6 * max(1.0, abs(other)) for other in seen):
+            raise InvalidModelError(f"height {z:g} given twice", field=f"{field}[{k}].height")
+        seen.append(z)
+        built.append(
+            StablePose(pose.outline, pose.holes, layers[0][1].probability, pose.normal_z, z)
+        )
+    first = built[0]
+    return StablePose(
+        first.outline, first.holes, first.probability, first.normal_z, first.height,
+        tuple(built[1:]),
+    )  # fmt: skip

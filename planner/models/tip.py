@@ -103,8 +103,18 @@ def grown_pose(stable: StablePose, radius: float) -> StablePose:
     """
     if radius == 0:
         return stable
+    if stable.slices:  # every probing height's outline grown alike
+        first, *rest = (grown_pose(p, radius) for p in stable.layers)
+        layered = StablePose(
+            first.outline, first.holes, stable.probability, stable.normal_z, stable.height,
+            tuple(rest),
+        )  # fmt: skip
+        layered.__dict__["faces"] = first.faces  # with the bare normals, as below
+        return layered
     rings = [_grown_ring(r, radius) for r in (stable.outline, *stable.holes)]
-    grown = StablePose(rings[0], tuple(rings[1:]), stable.probability, stable.normal_z)
+    grown = StablePose(
+        rings[0], tuple(rings[1:]), stable.probability, stable.normal_z, stable.height
+    )
     bare = stable.faces
     edges = geometry.ring_faces(rings)
     # the grown faces keep the bare normals (a mitre cut short tilts its edge a little)

@@ -7,11 +7,13 @@ survivor sets and scores them. World frame, lengths in the object files' unit.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
 import numpy as np
 
+from planner.models.heights import probing_heights
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.budget import Budget
 from planner.planning.candidate_generation import generate_candidates
@@ -82,11 +84,63 @@ def analyse(
     config = config or StrategyConfig()
     gen = as_generator(rng)
     by_name = models_by_name(models)
+    budget = budget or Budget()
     posed = pose_hypotheses(hypotheses, by_name)
     contacts = [o.contact for o in observations if o.contact is not None]
     own = strategy_paths(
         config, hypotheses, by_name, posed, contacts, workspace, sensor, sensor_position, gen
     )
+    parts = []
+    for k, height in enumerate(probing_heights(by_name.values())):
+        at = posed if height is None else pose_hypotheses(hypotheses, by_name, height)
+        extra = [own, Candidates.from_paths(list(extra_paths))] if k == 0 else []
+        parts.append(
+            _at_height(
+                hypotheses, at, height, extra, workspace, sensor, sensor_position, config, gen,
+                observations, budget, layer_offsets(hypotheses, by_name, height),
+            )
+        )  # fmt: skip
+    cands = Candidates.concat([p[0] for p in parts])
+    found = Outcomes.concat([p[1] for p in parts])
+    truncated = any(p[3] for p in parts)
+    table = SurvivorTable.from_bits(np.concatenate([p[2] for p in parts]), posed.class_weight)
+    motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
+    info = information_scores(table)
+    return Analysis(posed, cands, found, table, info, motion, truncated)
+
+
+def layer_offsets(
+    hypotheses: Sequence[Hypothesis], models: Mapping[str, ObjectModel], height: float | None
+) -> np.ndarray:
+    """(H,) where the faces of the layer at `height` start among each hypothesis'
+    stable pose's `all_faces` (0 at the default height)."""
+    out = np.zeros(len(hypotheses), dtype=np.int64)
+    if height is None:
+        return out
+    for i, h in enumerate(hypotheses):
+        pose = models[h.object].stable_poses[h.stable_pose]
+        k = pose.layer_index(height)
+        out[i] = sum(len(p.faces) for p in pose.layers[:k])
+    return out
+
+
+def _at_height(
+    hypotheses: Sequence[Hypothesis],
+    posed: PosedSet,
+    height: float | None,
+    extra: list[Candidates],
+    workspace: Workspace,
+    sensor: SensorBounds,
+    sensor_position: Sequence[float],
+    config: StrategyConfig,
+    gen: np.random.Generator,
+    observations: Sequence[Observation],
+    budget: Budget,
+    offsets: np.ndarray,
+) -> tuple[Candidates, Outcomes, np.ndarray, bool]:
+    """Candidates at one probing height (`posed`: the hypotheses' outlines there),
+    their outcomes (faces numbered as in each stable pose's `all_faces`), class
+    survivor bits, and whether the budget cut them short."""
     features = feature_candidates(posed, workspace, sensor, config.candidates.feature_paths)
     cands = generate_candidates(
         posed,
@@ -95,20 +149,14 @@ def analyse(
         config.candidates,
         gen,
         sensor_position=sensor_position,
-        extra=Candidates.concat(
-            [
-                own,
-                features,
-                Candidates.from_paths(list(extra_paths)),
-            ]
-        ),
-    )
-    fresh = np.flatnonzero(~repeated_paths(cands, observations, posed, sensor))
+        extra=Candidates.concat([*extra, features]),
+    ).at_height(height)
+    here = [o for o in observations if o.path.height == height]
+    fresh = np.flatnonzero(~repeated_paths(cands, here, posed, sensor))
     if 0 < len(fresh) < len(cands):
         cands = cands.subset(fresh)
     outcomes: list[Outcomes] = []
     bits: list[np.ndarray] = []
-    budget = budget or Budget()
     # anytime: candidates in blocks, best first (the strategy's own, extra, general);
     # when the budget runs out, the blocks done so far are the candidates
     size = max(_BLOCK, _BLOCK_ELEMENTS // len(posed))
@@ -117,25 +165,22 @@ def analyse(
         if outcomes and budget.exhausted():
             break
         part = cands.subset(np.arange(lo, min(lo + block, len(cands))))
-        outcomes.append(
-            predict_outcomes(
-                posed, part.origins, part.directions, part.lengths, sensor, config.outcome
-            )
+        out = predict_outcomes(
+            posed, part.origins, part.directions, part.lengths, sensor, config.outcome
         )
         budget.spend("outcome_cell", len(part) * len(posed))
         bits.append(
             pin_families(
                 hypotheses,
                 posed,
-                outcomes[-1],
-                class_bits(posed, outcomes[-1], sensor, config.outcome),
+                out,
+                class_bits(posed, out, sensor, config.outcome),
                 sensor,
             )
         )
+        if offsets.any():
+            out = dataclasses.replace(out, face=np.where(out.face >= 0, out.face + offsets, -1))
+        outcomes.append(out)
     found = Outcomes.concat(outcomes)
     truncated = len(found.hit) < len(cands)
-    cands = cands.subset(np.arange(len(found.hit)))
-    table = SurvivorTable.from_bits(np.concatenate(bits), posed.class_weight)
-    motion = motion_cost(cands.origins, found.travel @ posed.weight, workspace, sensor_position)
-    info = information_scores(table)
-    return Analysis(posed, cands, found, table, info, motion, truncated)
+    return cands.subset(np.arange(len(found.hit))), found, np.concatenate(bits), truncated

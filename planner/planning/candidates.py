@@ -24,8 +24,9 @@ __all__ = ["Candidates", "paths_through"]
 class Candidates:
     """C paths: `origins`, unit `directions`, `aims` (C, 2), `lengths` (C,),
     `source` (C,) naming where each came from (extra, intersection, boundary, ...),
-    and `tier` (C,) the rank a strategy gave its own paths (the thesis window's
-    level of admitted strength; 0 elsewhere)."""
+    `tier` (C,) the rank a strategy gave its own paths (the thesis window's
+    level of admitted strength; 0 elsewhere), and `height` (C,) each path's
+    probing height (NaN: the default height, DESIGN §4.13)."""
 
     origins: np.ndarray
     directions: np.ndarray
@@ -33,18 +34,37 @@ class Candidates:
     aims: np.ndarray
     source: np.ndarray
     tier: np.ndarray | None = None
+    height: np.ndarray | None = None
 
     def __post_init__(self) -> None:
         if self.tier is None:
             object.__setattr__(self, "tier", np.zeros(len(self.lengths), dtype=int))
+        if self.height is None:
+            object.__setattr__(self, "height", np.full(len(self.lengths), np.nan))
 
     def __len__(self) -> int:
         return len(self.lengths)
 
     def path(self, i: int) -> SensingPath:
         return SensingPath(
-            tuple(self.origins[i]), tuple(self.directions[i]), float(self.lengths[i])
+            tuple(self.origins[i]),
+            tuple(self.directions[i]),
+            float(self.lengths[i]),
+            self.height_of(i),
         )
+
+    def height_of(self, i: int) -> float | None:
+        """Candidate `i`'s probing height (None: the default)."""
+        z = float(self.height[i])  # type: ignore[index]
+        return None if np.isnan(z) else z
+
+    def at_height(self, height: float | None) -> Candidates:
+        """The same paths at probing `height`."""
+        z = np.nan if height is None else float(height)
+        return Candidates(
+            self.origins, self.directions, self.lengths, self.aims, self.source, self.tier,
+            np.full(len(self), z),
+        )  # fmt: skip
 
     def subset(self, index: np.ndarray | Sequence[int]) -> Candidates:
         idx = np.asarray(index, dtype=int)
@@ -55,6 +75,7 @@ class Candidates:
             self.aims[idx],
             self.source[idx],
             self.tier[idx],
+            self.height[idx],  # type: ignore[index]
         )
 
     @classmethod
@@ -73,7 +94,7 @@ class Candidates:
         return cls(
             *(
                 np.concatenate([getattr(p, k) for p in parts])
-                for k in ("origins", "directions", "lengths", "aims", "source", "tier")
+                for k in ("origins", "directions", "lengths", "aims", "source", "tier", "height")
             )
         )
 
@@ -99,6 +120,7 @@ class Candidates:
             end if aims is None else np.asarray(aims, float),
             np.full(len(paths), source, dtype="<U12"),
             None if tier is None else np.asarray(tier, dtype=int),
+            np.array([np.nan if p.height is None else p.height for p in paths], dtype=float),
         )
 
 

@@ -317,6 +317,7 @@ def _planned(
         motion_cost=float(found.motion[i]),
         source=str(c.source[i]),
         expected_eps_t=None if expected_eps_t is None else float(expected_eps_t),
+        height=c.height_of(i),
     )
 
 

@@ -33,7 +33,9 @@ class PosedSet:
     sharing its end vertex); `eps_t`, `rotation` (error bounds), `weight`
     (normalized probability) and `cls` (equivalence class index 0..K-1) are (H,);
     `class_weight` is (K,) and `class_ids` holds the callers' class labels.
-    `rings[h]` is the posed outline and holes of hypothesis h.
+    `rings[h]` is the posed outline and holes of hypothesis h. `touched` (H, s, 2)
+    is the posed normal of the face each hypothesis assigns each contact to (of any
+    probing height's layer; NaN for a spurious contact).
     """
 
     start: np.ndarray
@@ -50,6 +52,7 @@ class PosedSet:
     class_ids: np.ndarray
     class_weight: np.ndarray
     rings: tuple[tuple[np.ndarray, tuple[np.ndarray, ...]], ...]
+    touched: np.ndarray
 
     def __len__(self) -> int:
         return len(self.weight)
@@ -65,9 +68,12 @@ class PosedSet:
 
 
 def pose_hypotheses(
-    hypotheses: Sequence[Hypothesis], models: Mapping[str, ObjectModel]
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    height: float | None = None,
 ) -> PosedSet:
-    """Move every hypothesis' outline into the world frame, as padded face arrays.
+    """Move every hypothesis' outline at probing `height` (None: the default
+    height) into the world frame, as padded face arrays.
 
     Probabilities are normalized to sum to 1; equivalence classes are renumbered
     0..K-1 in increasing order of their labels.
@@ -82,7 +88,8 @@ def pose_hypotheses(
         if not 0 <= h.stable_pose < len(models[h.object].stable_poses):
             raise PlannerError("no such stable pose", field=f"hypotheses[{i}].stable_pose")
         model_of[i] = keys.setdefault((h.object, h.stable_pose), len(keys))
-    poses = [models[name].stable_poses[sp] for name, sp in keys]
+    whole = [models[name].stable_poses[sp] for name, sp in keys]
+    poses = [p.layer(height) for p in whole]
     n_faces = max(len(p.faces) for p in poses)
     shape = (len(poses), n_faces)
     m_start, m_end, m_normal = (np.zeros((*shape, 2)) for _ in range(3))
@@ -125,7 +132,25 @@ def pose_hypotheses(
         class_ids=class_ids,
         class_weight=np.bincount(cls, weights=weight, minlength=len(class_ids)),
         rings=_rings(poses, model_of, rot, shift),
+        touched=_touched(hypotheses, whole, model_of, rot),
     )
+
+
+def _touched(
+    hypotheses: Sequence[Hypothesis], poses: list, model_of: np.ndarray, rot: np.ndarray
+) -> np.ndarray:
+    """(H, s, 2) posed normal of each assigned face (NaN: spurious)."""
+    width = max(len(h.assignment) for h in hypotheses)
+    assigned = np.full((len(hypotheses), width), -1, dtype=np.int64)
+    for i, h in enumerate(hypotheses):
+        assigned[i, : len(h.assignment)] = [-1 if f is None else f for f in h.assignment]
+    out = np.full((*assigned.shape, 2), np.nan)
+    for m, pose in enumerate(poses):
+        mine = np.flatnonzero(model_of == m)
+        normals = pose.all_faces.normal[np.maximum(assigned[mine], 0)]  # (k, s, 2)
+        out[mine] = np.einsum("kij,ksj->ksi", rot[mine], normals)
+    out[assigned < 0] = np.nan
+    return out
 
 
 def _rings(poses: list, model_of: np.ndarray, rot: np.ndarray, shift: np.ndarray) -> tuple:

@@ -95,7 +95,7 @@ def refinement(
         budget = _MAX_ROWS
         for (name, pose_index), ks in by_pose.items():
             stable = models[name].stable_poses[pose_index]
-            faces = stable.faces
+            faces = stable.all_faces  # outcome faces index every layer's, as assignments do
             c_idx, k_pos = np.nonzero(sure[:, ks])
             if budget <= 0 or not len(c_idx):
                 continue
@@ -133,7 +133,7 @@ def refinement(
                 continue
             # the recognition's bounds (planner.recognition), on determined rows
             second = phi**2 * stable.centroid_radius + phi * eps_d
-            moved = point_bounds(fit, stable.outline, assigned, eps_d, phi, det) * (1 + phi)
+            moved = point_bounds(fit, stable.extent, assigned, eps_d, phi, det) * (1 + phi)
             swept = consistent_set_bounds(
                 points[det],
                 normals[det],
@@ -142,7 +142,7 @@ def refinement(
                 assigned[det],
                 fit.theta[det],
                 fit.t[det],
-                stable.outline,
+                stable.extent,
                 eps_d,
                 phi,
                 samples=_SWEEP_SAMPLES,

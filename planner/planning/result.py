@@ -46,7 +46,8 @@ class PlannedPath:
     distinguishing measurement as the recognition itself would judge the touch
     (:mod:`planner.planning.forecast`; None where not forecast), against `p_distinguishing`,
     the outcome model's worst-case value, which is sound where it says 1 and
-    lower than what happens elsewhere."""
+    lower than what happens elsewhere; `height` the probing height (None: the
+    default height, DESIGN §4.13)."""
 
     origin: tuple[float, float]
     direction: tuple[float, float]
@@ -62,10 +63,11 @@ class PlannedPath:
     expected_eps_t: float | None = None
     p_forecast: float | None = None
     scored_by: str = "outcome_model"
+    height: float | None = None
 
     @property
     def path(self) -> SensingPath:
-        return SensingPath(self.origin, self.direction, self.length)
+        return SensingPath(self.origin, self.direction, self.length, self.height)
 
 
 @dataclass(frozen=True)

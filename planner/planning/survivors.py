@@ -54,7 +54,7 @@ def pin_families(
     on = assigned >= 0
     first = np.argmax(on, axis=1)
     rows = np.arange(len(hypotheses))
-    n = posed.normal[rows[:, None], np.maximum(assigned, 0)]  # (H, s, 2)
+    n = np.nan_to_num(posed.touched)  # (H, s, 2)
     u = n[rows, first]  # (H, 2): a touched face's posed normal
     cross = np.abs(n[..., 0] * u[:, None, 1] - n[..., 1] * u[:, None, 0])
     parallel = on.any(axis=1) & np.all(~on | (cross <= tol), axis=1)

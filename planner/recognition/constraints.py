@@ -102,13 +102,18 @@ def pair_feasibility(
     return ok
 
 
-def unary_feasibility(pose: StablePose, contact: Contact, normal_z_error: float) -> np.ndarray:
-    """Boolean (F,) mask: faces a single contact may lie on by itself.
+def unary_feasibility(
+    pose: StablePose, contact: Contact, normal_z_error: float, height: float | None = None
+) -> np.ndarray:
+    """Boolean (F,) mask over `pose.all_faces`: faces a single contact made at
+    probing `height` may lie on by itself.
 
-    Only the optional out-of-plane normal constrains one contact alone (thesis
-    §6.3): a measured `normal_z` must lie within `normal_z_error` of the face's.
+    Only the faces of the layer at that height (DESIGN §4.13), and the optional
+    out-of-plane normal (thesis §6.3): a measured `normal_z` must lie within
+    `normal_z_error` of the face's.
     """
-    mask = np.ones(len(pose.faces), dtype=bool)
-    if contact.normal_z is not None and pose.normal_z is not None:
-        mask &= np.abs(pose.normal_z - contact.normal_z) <= normal_z_error + ANGLE_SLACK
+    mask = pose.face_layer == pose.layer_index(height)
+    normal_z = pose.all_normal_z
+    if contact.normal_z is not None and normal_z is not None:
+        mask &= np.abs(normal_z - contact.normal_z) <= normal_z_error + ANGLE_SLACK
     return mask

@@ -97,7 +97,7 @@ def evaluate(
     """Fit, sample and model-check every row of one group against all observations."""
     eps_d, phi = bounds.position_error, bounds.normal_error
     stable = group.stable
-    faces = stable.faces
+    faces = stable.all_faces
     slack = LENGTH_SLACK * length_scale * 10
     contact_obs = [o for o in observations if o.contact is not None]
     assigned = rows >= 0

@@ -130,8 +130,9 @@ def clear_paths(
             contact_col += 1
         idx = np.flatnonzero(check)
         if idx.size:
+            layer = group.stable.layer_index(obs.path.height)
             keep[idx] &= _free_space_ok(
-                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor
+                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor, layer
             )
     return keep
 
@@ -151,9 +152,11 @@ def _free_space_ok(
     direction: np.ndarray,
     length: float,
     floor: float,
+    layer: int = 0,
 ) -> np.ndarray:
     """Does the segment origin -> origin + length*direction avoid the posed outline
-    shrunk by `shrink` (per sample)? Checked in the model frame, vectorized."""
+    of `layer` (the path's height) shrunk by `shrink` (per sample)? Checked in the
+    model frame, vectorized."""
     if length <= 0:
         return np.ones(len(theta), dtype=bool)
     R = rotation_matrices(theta)
@@ -164,5 +167,5 @@ def _free_space_ok(
     ok = np.ones(len(theta), dtype=bool)
     for value in np.unique(bucket):
         idx = np.flatnonzero(bucket == value)
-        ok[idx] = ~shapely.intersects(lines[idx], group.shrunk(float(value)))
+        ok[idx] = ~shapely.intersects(lines[idx], group.shrunk(float(value), layer))
     return ok

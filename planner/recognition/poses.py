@@ -93,7 +93,7 @@ def fit_poses(
     """Least-squares pose of every row over its assigned contacts (DESIGN §4.4),
     the bounds' reference point at the outline's centroid; rank-1 rows pinned at
     slide coordinate 0."""
-    faces = stable.faces
+    faces = stable.all_faces
     sigma_d, sigma_phi = noise_scales(eps_d, phi, length_scale)
     ref = np.broadcast_to(stable.centroid, (len(face), 2))
     fit = fit_batch(
@@ -142,7 +142,7 @@ def fit_bounds(
         second = (phi**2) * r_c + phi * eps_d
         d_th = d_th * (1 + phi) + phi**2
         # first-order worst case at every outline vertex (at s = 0: for the sample spacing)
-        moved = point_bounds(fit, stable.outline, assigned, eps_d, phi)
+        moved = point_bounds(fit, stable.extent, assigned, eps_d, phi)
         eps_t0 = 2 * (moved.max(axis=1) * (1 + phi) + second)
         # a contact's own model point moves by at most this: its slide margin
         at_contact = point_bounds(fit, pose.model_points, assigned, eps_d, phi)
@@ -267,11 +267,11 @@ def sample_bounds(
     poses in `linearized` mode, the smaller of those and the bounds of the set of
     poses consistent with the contacts
     (:func:`planner.recognition.consistent.consistent_set_bounds`)."""
-    fit, faces = pose.fit, stable.faces
+    fit, faces = pose.fit, stable.all_faces
     src, s_val, cell = samples.src, samples.s, samples.cell
     e, rho = pose.slide_axis, pose.rho
     eps_t0, d_th, second = bounds.eps_t, bounds.d_theta, bounds.second
-    origin_and_outline = np.vstack([[0.0, 0.0], stable.outline])
+    origin_and_outline = np.vstack([[0.0, 0.0], stable.extent])
     feasible = np.ones(len(src), dtype=bool)
     if config.bound_mode != "thesis":
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]

@@ -29,6 +29,7 @@ import numpy as np
 
 from planner.errors import InvalidObservationError
 from planner.memo import cached_property
+from planner.models.heights import check_height, probing_heights
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.equivalence import (
@@ -118,7 +119,9 @@ class Session:
 
     # -- events -----------------------------------------------------------------
     def observe(self, observation: Observation) -> Session:
-        """The session after one more observation (the tree is extended, not rebuilt)."""
+        """The session after one more observation (the tree is extended, not rebuilt).
+        Refuses a path height some object has no slice at."""
+        check_height(self.models, observation.path.height)
         return Session(
             self.models,
             self.sensor,
@@ -190,7 +193,9 @@ class Session:
         seen = self.surface_observations
         contacts = [o.contact for o in seen if o.contact is not None]
         if last.contact is not None:
-            level = extend(level, self._groups, contacts, self.bounds, self.config)
+            level = extend(
+                level, self._groups, contacts, self.bounds, self.config, last.path.height
+            )
         candidates = []
         rows_kept = []
         for g, (group, rows) in enumerate(zip(self._groups, level.rows, strict=True)):
@@ -275,9 +280,21 @@ class Session:
         """Class label per hypothesis (:mod:`planner.recognition.equivalence`): posed
         outlines within the symmetry tolerance of each other, most probable first."""
         tau = self.symmetry_tolerance
-        rings = [PosedRings.of(self._groups[c.group].stable, c.theta, c.t) for c in cands]
         order = np.argsort(-prob, kind="stable")
-        return equivalence_classes(rings, order, _interpretation_labels(cands), tau)
+        labels = _interpretation_labels(cands)
+        # one class: the outlines coincide at every probing height
+        per_height = [
+            equivalence_classes(
+                [PosedRings.of(self._groups[c.group].stable.layer(z), c.theta, c.t) for c in cands],
+                order,
+                labels,
+                tau,
+            )
+            for z in probing_heights(self.models)
+        ]
+        if len(per_height) == 1:
+            return per_height[0]
+        return np.unique(np.column_stack(per_height), axis=0, return_inverse=True)[1].ravel()
 
     @property
     def status(self) -> Status:

@@ -42,18 +42,20 @@ class Group:
 
     @cached_property
     def tables(self) -> ConstraintTables:
-        return build_tables(self.stable.faces)
+        """The tables of every layer's faces together: contacts at different
+        heights constrain each other as faces of one rigid pose do."""
+        return build_tables(self.stable.all_faces)
 
-    def shrunk(self, tol: float) -> shapely.Geometry:
-        """The model outline shrunk by `tol` (cached per tolerance bucket), prepared."""
+    def shrunk(self, tol: float, layer: int = 0) -> shapely.Geometry:
+        """The model outline of `layer` shrunk by `tol` (cached per tolerance
+        bucket), prepared."""
         cache = self.__dict__.setdefault("_shrunk", {})
-        if tol not in cache:
-            geom = (
-                self.stable.shape.buffer(-tol, join_style="mitre") if tol > 0 else self.stable.shape
-            )
+        if (tol, layer) not in cache:
+            shape = self.stable.layers[layer].shape
+            geom = shape.buffer(-tol, join_style="mitre") if tol > 0 else shape
             shapely.prepare(geom)
-            cache[tol] = geom
-        return cache[tol]
+            cache[tol, layer] = geom
+        return cache[tol, layer]
 
 
 def make_groups(models: list[ObjectModel]) -> list[Group]:
@@ -83,17 +85,18 @@ def extend(
     contacts: list[Contact],
     bounds: SensorBounds,
     config: RecognitionConfig,
+    height: float | None = None,
 ) -> TreeLevel:
-    """Extend every surviving row by the newest contact (constraint checks only)."""
+    """Extend every surviving row by the newest contact, made at probing `height`
+    (constraint checks only): it may lie only on faces of the layer at that height."""
     k = len(contacts) - 1
     new = contacts[k]
     cache = dict(level.pair_cache)
     out = []
     for g, (group, rows) in enumerate(zip(groups, level.rows, strict=True)):
-        F = len(group.stable.faces)
-        ok = np.broadcast_to(
-            unary_feasibility(group.stable, new, config.normal_z_error), (len(rows), F)
-        ).copy()
+        F = len(group.stable.all_faces)
+        unary = unary_feasibility(group.stable, new, config.normal_z_error, height)
+        ok = np.broadcast_to(unary, (len(rows), F)).copy()
         for j in range(k):
             key = (g, j, k)
             if key not in cache:

@@ -52,7 +52,7 @@ def residual_fitness(
     outline. 1 for slide-family samples and in `thesis` mode. `face`, `assigned`
     (K, s) are the rows the samples were drawn from.
     """
-    fit, faces = pose.fit, group.stable.faces
+    fit, faces = pose.fit, group.stable.all_faces
     src = samples.src
     fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
     det, at, pos = determined_rows(fit, src)
@@ -176,7 +176,7 @@ def _admitted_share(
     error allowance. It weighs, it does not prune (at least `_FITNESS_FLOOR`;
     1 where no pose is spread)."""
     K, M = valid.shape
-    faces = group.stable.faces
+    faces = group.stable.all_faces
     R = rotation_matrices(theta.reshape(-1)).reshape(K, M, 2, 2)
     start = np.einsum("kmij,ksj->kmsi", R, faces.start[face]) + t[:, :, None, :]
     end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None, :]
