@@ -121,6 +121,11 @@ class PlannedPathOut(BaseModel):
         "p_distinguishing = 1 is a certificate), or, when that model calls nothing "
         "informative, the recognition's own predictions (p_forecast)",
     )
+    height: float | None = Field(
+        default=None,
+        description="the probing height to run the path at (null: the default height); "
+        "the observation's path carries it back",
+    )
 
 
 class PlanOut(BaseModel):

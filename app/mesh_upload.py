@@ -19,18 +19,25 @@ __all__ = ["mesh_object"]
 def mesh_object(
     data: bytes,
     file_type: str,
-    height: float,
+    heights: tuple[float, ...],
     name: str,
     max_poses: int | None,
     settings: Settings,
     inputs: InputModels,
 ) -> dict[str, Any]:
-    """The §8 object of a mesh upload: its work bounded by the mesh limits of
-    `settings` before it starts, the result held to the limits of a posted object
-    (an InvalidInputError naming where it breaks one)."""
+    """The §8 object of a mesh upload sliced at `heights` (the first the default
+    height): its work bounded by the mesh limits of `settings` before it starts,
+    the result held to the limits of a posted object (an InvalidInputError naming
+    where it breaks one)."""
     s = settings
+    if len(heights) > s.max_slices:
+        raise InvalidInputError(
+            f"{len(heights)} heights exceed max_slices ({s.max_slices})", field="heights"
+        )
     limits = MeshLimits(s.max_mesh_triangles, s.max_hull_faces, s.max_sliced_poses)
-    stored = object_to_dict(import_mesh_bytes(data, file_type, height, name, max_poses, limits))
+    height, *extra = heights
+    model = import_mesh_bytes(data, file_type, height, name, max_poses, limits, heights=extra)
+    stored = object_to_dict(model)
     try:
         inputs.ObjectIn.model_validate(stored)
     except ValidationError as exc:

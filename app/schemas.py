@@ -46,6 +46,7 @@ __all__ = [
     "PoseOut",
     "SensorOut",
     "SessionOut",
+    "SliceOut",
     "StablePoseOut",
     "Status",
     "StrategyOut",
@@ -98,6 +99,9 @@ class PathOut(BaseModel):
     origin: Vec2Out
     direction: Vec2Out = Field(description="unit vector")
     length: float
+    height: float | None = Field(
+        None, description="probing height above the table; null: the default height"
+    )
 
 
 class ContactOut(BaseModel):
@@ -196,11 +200,22 @@ class ObjectCreated(BaseModel):
     name: str
 
 
-class StablePoseOut(BaseModel):
+class SliceOut(BaseModel):
+    height: float
     outline: list[Vec2Out]
+    holes: list[list[Vec2Out]] | None = None
+    normal_z: list[float] | None = None
+
+
+class StablePoseOut(BaseModel):
+    """One stable pose: its `outline` (with holes), or its `slices` at several
+    probing heights, the first at the default height."""
+
+    outline: list[Vec2Out] | None = None
     holes: list[list[Vec2Out]] | None = None
     probability: float
     normal_z: list[float] | None = None
+    slices: list[SliceOut] | None = None
 
 
 class ObjectOut(BaseModel):
@@ -254,6 +269,7 @@ class _Shapes:
     NormalZ: Any
     Name: Any
     Length: Any
+    Coord: Any
 
 
 def _shapes(settings: Settings) -> _Shapes:
@@ -274,16 +290,45 @@ def _shapes(settings: Settings) -> _Shapes:
         ],
         Name=Annotated[str, Field(min_length=1, max_length=200, pattern=NAME_PATTERN)],
         Length=Annotated[float, Field(gt=0, le=4 * big, allow_inf_nan=False)],
+        Coord=Coord,
     )
 
 
 def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
-    class StablePoseIn(BaseModel):
-        model_config = ConfigDict(extra="forbid", title="StablePoseIn")
+    class SliceIn(BaseModel):
+        """The stable pose's outline at one probing height above the table."""
+
+        model_config = ConfigDict(extra="forbid", title="SliceIn")
+        height: t.Coord
         outline: t.Ring
+        holes: t.Holes = Field(default_factory=list)
+        normal_z: t.NormalZ | None = None
+
+    class StablePoseIn(BaseModel):
+        """One stable pose: an `outline` (with holes), or `slices` at several probing
+        heights (DESIGN §4.13), the first at the default height; at most
+        `max_pose_faces` faces in all."""
+
+        model_config = ConfigDict(extra="forbid", title="StablePoseIn")
+        outline: t.Ring | None = None
         holes: t.Holes = Field(default_factory=list)
         probability: Annotated[float, Field(gt=0, le=1)] = 1.0
         normal_z: t.NormalZ | None = None
+        slices: Annotated[list[SliceIn], Field(min_length=1, max_length=settings.max_slices)] | None = None
+
+        @model_validator(mode="after")
+        def _one_form(self) -> Any:
+            if (self.outline is None) == (self.slices is None):
+                raise ValueError("give exactly one of 'outline' or 'slices'")
+            if self.slices is not None and (self.holes or self.normal_z is not None):
+                raise ValueError("with 'slices', 'holes' and 'normal_z' go in each slice")
+            layers = self.slices or [self]
+            faces = sum(len(s.outline or ()) + sum(map(len, s.holes)) for s in layers)
+            if faces > settings.max_pose_faces:
+                raise ValueError(
+                    f"{faces} faces in all exceed max_pose_faces ({settings.max_pose_faces})"
+                )
+            return self
 
     class ObjectIn(BaseModel):
         """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
@@ -444,6 +489,11 @@ def _observation_in(t: _Shapes) -> type[BaseModel]:
         origin: t.Vec2
         direction: t.Vec2 = Field(description="non-zero; normalized by the service")
         length: t.Length
+        height: t.Coord | None = Field(
+            None,
+            description="probing height above the table, one the objects have slices at "
+            "(the plan's path says which); null: the default height",
+        )
 
     class ContactIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="ContactIn")

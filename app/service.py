@@ -207,11 +207,11 @@ class SessionService:
         return created, model.name
 
     async def import_mesh(
-        self, data: bytes, file_type: str, height: float, name: str, max_poses: int | None
+        self, data: bytes, file_type: str, heights: tuple, name: str, max_poses: int | None
     ) -> tuple[bool, str]:
         """Register the object model of an uploaded triangle mesh (:func:`mesh_object`)."""
         stored = await self.run_cpu(
-            mesh_object, data, file_type, height, name, max_poses, self.settings, self.inputs
+            mesh_object, data, file_type, heights, name, max_poses, self.settings, self.inputs
         )
         created = await self.run_db(self.store.put_object, stored["name"], stored)
         return created, stored["name"]

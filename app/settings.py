@@ -57,6 +57,10 @@ class Settings(BaseSettings):
     max_outline_vertices: int = Field(500, ge=3, le=100_000)
     max_holes: int = Field(16, ge=0, le=10_000)
     max_stable_poses: int = Field(32, ge=1, le=10_000)
+    max_slices: int = Field(8, ge=1, le=1_000, description="probing heights per stable pose")
+    max_pose_faces: int = Field(
+        8_500, ge=3, le=10_000_000, description="faces of one stable pose, every slice and hole"
+    )
     max_objects_per_session: int = Field(16, ge=1, le=10_000)
     max_observations_per_session: int = Field(100, ge=1, le=100_000)
     max_outliers: int = Field(3, ge=0, le=100)

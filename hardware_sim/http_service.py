@@ -301,7 +301,9 @@ class HttpService:
         )
         status = plan.status.value
         best = plan.paths[0] if plan.paths else None
-        path = None if best is None else SensingPath(best.origin, best.direction, best.length)
+        path = None if best is None else SensingPath(
+            best.origin, best.direction, best.length, _height(best.height)
+        )  # fmt: skip
         opening = best is None or status == "awaiting_contact"
         return Advice(
             status=status,
@@ -437,3 +439,8 @@ def _retry_after(response: Response[Any], default: float) -> float:
         return min(float(response.headers.get("retry-after", default)), 30.0)
     except ValueError:
         return default
+
+
+def _height(value: object) -> float | None:
+    """The plan's probing height (absent or null: the default height)."""
+    return float(value) if isinstance(value, int | float) else None

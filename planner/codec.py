@@ -86,12 +86,16 @@ def _optional(x: float | None) -> float | None:
 
 # -- observations -----------------------------------------------------------------------------
 def path_to_dict(path: SensingPath) -> dict[str, Any]:
-    """``{"origin": [x, y], "direction": [dx, dy], "length": L}`` (direction a unit vector)."""
-    return {
+    """``{"origin": [x, y], "direction": [dx, dy], "length": L}`` (direction a unit
+    vector), with ``"height": z`` when the path has a probing height."""
+    out: dict[str, Any] = {
         "origin": _vec(path.origin),
         "direction": _vec(path.direction),
         "length": float(path.length),
     }
+    if path.height is not None:
+        out["height"] = float(path.height)
+    return out
 
 
 def contact_to_dict(
@@ -124,7 +128,12 @@ def observation_from_dict(data: Mapping[str, Any]) -> Observation:
     path = data["path"]
     contact = data.get("contact")
     return Observation(
-        SensingPath(tuple(path["origin"]), tuple(path["direction"]), float(path["length"])),
+        SensingPath(
+            tuple(path["origin"]),
+            tuple(path["direction"]),
+            float(path["length"]),
+            None if path.get("height") is None else float(path["height"]),
+        ),
         None
         if contact is None
         else Contact(tuple(contact["point"]), tuple(contact["normal"]), contact.get("normal_z")),
@@ -286,6 +295,7 @@ def planned_path_to_dict(p: PlannedPath) -> dict[str, Any]:
         "expected_eps_t": _optional(p.expected_eps_t),
         "p_forecast": _optional(p.p_forecast),
         "scored_by": str(p.scored_by),
+        "height": _optional(p.height),
     }
 
 

@@ -66,6 +66,7 @@ CSV_COLUMNS = (
     "eps_t",
     "probability",
     "class_probability",
+    "height",
 )
 
 
@@ -214,6 +215,7 @@ def report_csv(report: dict[str, Any]) -> str:
                 distance=t["distance"],
                 normal_angle=t["normal_angle"],
                 clearance=t["clearance"],
+                height=t["path"].get("height"),
             )
         )
     r = report["result"]

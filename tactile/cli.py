@@ -175,7 +175,10 @@ def cmd_import_mesh(args: argparse.Namespace) -> int:
     from planner.models.library import object_to_dict
     from planner.models.mesh_files import import_mesh_file
 
-    model = import_mesh_file(args.mesh, args.height, args.name, args.max_poses)
+    heights = ([] if args.height is None else [args.height]) + list(args.heights or [])
+    if not heights:
+        raise SystemExit("import-mesh: give --height Z or --heights Z [Z ...]")
+    model = import_mesh_file(args.mesh, heights[0], args.name, args.max_poses, heights[1:])
     text = json.dumps({"objects": [object_to_dict(model)]}, indent=1)
     if args.out:
         from planner.models.library import dump_objects
@@ -247,9 +250,17 @@ def build_parser() -> argparse.ArgumentParser:
     bench.add_argument("--repeat", type=int, default=1, help="runs per plan (median kept)")
     bench.set_defaults(func=cmd_bench)
 
-    mesh = sub.add_parser("import-mesh", help="3-D mesh -> stable poses sliced at a height")
+    mesh = sub.add_parser("import-mesh", help="3-D mesh -> stable poses sliced at heights")
     mesh.add_argument("mesh", help="STL, OBJ, PLY or OFF file")
-    mesh.add_argument("--height", type=float, required=True, help="slice height above the table")
+    mesh.add_argument("--height", type=float, default=None, help="slice height above the table")
+    mesh.add_argument(
+        "--heights",
+        type=float,
+        nargs="+",
+        default=None,
+        help="probing heights, each stable pose sliced at every one (the first, or "
+        "--height when given, is the default height)",
+    )
     mesh.add_argument("--name", default=None)
     mesh.add_argument("--max-poses", type=int, default=None)
     mesh.add_argument("--out", default=None, help="write an object file instead of printing")

@@ -5,6 +5,7 @@ from typing import Annotated, Literal
 from urllib.parse import quote
 
 from fastapi import APIRouter, Path, Query, Request, Response
+from pydantic import Field
 
 from app.deps import ServiceDep, auth_dependencies
 from app.errors import (
@@ -128,10 +129,20 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         name: Annotated[str, Query(min_length=1, max_length=200, pattern=NAME_PATTERN)],
         file_type: Annotated[Literal["stl", "obj", "ply", "off", "glb"], Query()] = "stl",
         max_poses: Annotated[int | None, Query(ge=1, le=64)] = None,
+        heights: Annotated[
+            list[Annotated[float, Field(gt=0, le=1e6)]] | None,
+            Query(
+                max_length=64,
+                description="more probing heights: each stable pose is also sliced there "
+                "(at most max_slices heights in all, `height` included)",
+            ),
+        ] = None,
     ):
         """Register a 3-D part from its triangle mesh (the request body, at most the body
         limit): stable poses with their probabilities, each sliced at `height` into an
-        outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+        outline (and at each of `heights`: slices at several probing heights, the
+        planner then chooses the height of each path), faces carrying their out-of-plane
+        normal. Same name, other geometry: 409.
         Content-Type application/octet-stream (or model/*, application/sla,
         application/vnd.ms-pki.stl); any other: 415."""
         _mesh_media_type(request)
@@ -139,7 +150,9 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         if not data:
             raise InvalidInputError("the request body must hold the mesh file", field="body")
         return await _registered(
-            response, service.import_mesh(data, file_type, height, name, max_poses)
+            response, service.import_mesh(
+                data, file_type, (height, *(heights or ())), name, max_poses
+            )
         )
 
     return router

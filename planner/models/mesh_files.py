@@ -8,6 +8,7 @@ suffix) and hands them over.
 from __future__ import annotations
 
 import os
+from collections.abc import Sequence
 from pathlib import Path
 
 import trimesh
@@ -41,12 +42,15 @@ def import_mesh_file(
     height: float,
     name: str | None = None,
     max_poses: int | None = None,
+    heights: Sequence[float] = (),
 ) -> ObjectModel:
     """The object model of the solid in a mesh file, probed at `height` (mesh
-    units above the table); `name` defaults to the file name without suffix.
+    units above the table) and at each of `heights`; `name` defaults to the file
+    name without suffix.
 
     See :func:`planner.models.mesh.object_from_mesh` for the stable poses kept and the
     errors raised on a mesh that gives no model.
     """
     mesh = load_mesh(path)
-    return object_from_mesh(mesh, height, Path(path).stem if name is None else name, max_poses)
+    name = Path(path).stem if name is None else name
+    return object_from_mesh(mesh, height, name, max_poses, heights=heights)

@@ -45,6 +45,8 @@ from .sensor_out import SensorOut
 from .session_create import SessionCreate
 from .session_out import SessionOut
 from .session_out_status import SessionOutStatus
+from .slice_in import SliceIn
+from .slice_out import SliceOut
 from .stable_pose_in import StablePoseIn
 from .stable_pose_out import StablePoseOut
 from .strategy_in import StrategyIn
@@ -100,6 +102,8 @@ __all__ = (
     "SessionCreate",
     "SessionOut",
     "SessionOutStatus",
+    "SliceIn",
+    "SliceOut",
     "StablePoseIn",
     "StablePoseOut",
     "StrategyIn",

@@ -8,6 +8,7 @@ from attrs import field as _attrs_field
 
 from ..types import UNSET, Unset
 
+from ..types import UNSET, Unset
 from typing import cast
 
 
@@ -26,11 +27,14 @@ class PathIn:
             direction (list[float]): non-zero; normalized by the service
             length (float):
             origin (list[float]): [x, y]
+            height (float | None | Unset): probing height above the table, one the objects have slices at (the plan's path
+                says which); null: the default height
      """
 
     direction: list[float]
     length: float
     origin: list[float]
+    height: float | None | Unset = UNSET
 
 
 
@@ -47,6 +51,12 @@ class PathIn:
 
 
 
+        height: float | None | Unset
+        if isinstance(self.height, Unset):
+            height = UNSET
+        else:
+            height = self.height
+
 
         field_dict: dict[str, Any] = {}
 
@@ -55,6 +65,8 @@ class PathIn:
             "length": length,
             "origin": origin,
         })
+        if height is not UNSET:
+            field_dict["height"] = height
 
         return field_dict
 
@@ -71,10 +83,21 @@ class PathIn:
         origin = cast(list[float], d.pop("origin"))
 
 
+        def _parse_height(data: object) -> float | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(float | None | Unset, data)
+
+        height = _parse_height(d.pop("height", UNSET))
+
+
         path_in = cls(
             direction=direction,
             length=length,
             origin=origin,
+            height=height,
         )
 
         return path_in

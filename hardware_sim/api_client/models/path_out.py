@@ -8,6 +8,7 @@ from attrs import field as _attrs_field
 
 from ..types import UNSET, Unset
 
+from ..types import UNSET, Unset
 from typing import cast
 
 
@@ -26,11 +27,13 @@ class PathOut:
             direction (list[float]): unit vector
             length (float):
             origin (list[float]):
+            height (float | None | Unset): probing height above the table; null: the default height
      """
 
     direction: list[float]
     length: float
     origin: list[float]
+    height: float | None | Unset = UNSET
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -48,6 +51,12 @@ class PathOut:
 
 
 
+        height: float | None | Unset
+        if isinstance(self.height, Unset):
+            height = UNSET
+        else:
+            height = self.height
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -56,6 +65,8 @@ class PathOut:
             "length": length,
             "origin": origin,
         })
+        if height is not UNSET:
+            field_dict["height"] = height
 
         return field_dict
 
@@ -72,10 +83,21 @@ class PathOut:
         origin = cast(list[float], d.pop("origin"))
 
 
+        def _parse_height(data: object) -> float | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(float | None | Unset, data)
+
+        height = _parse_height(d.pop("height", UNSET))
+
+
         path_out = cls(
             direction=direction,
             length=length,
             origin=origin,
+            height=height,
         )
 
 

@@ -38,6 +38,8 @@ class PlannedPathOut:
             p_informative (float):
             expected_eps_t (float | None | Unset): refining paths: the probability-weighted error-disk diameter expected
                 after the touch (length)
+            height (float | None | Unset): the probing height to run the path at (null: the default height); the
+                observation's path carries it back
             p_forecast (float | None | Unset): P(DM) as the recognition itself would judge the touch (each class' predicted
                 outcome observed); set on the first `strategy.forecast` paths, None elsewhere. p_distinguishing is the outcome
                 model's worst-case value: sure where it says 1, lower than what happens elsewhere
@@ -58,6 +60,7 @@ class PlannedPathOut:
     p_distinguishing: float
     p_informative: float
     expected_eps_t: float | None | Unset = UNSET
+    height: float | None | Unset = UNSET
     p_forecast: float | None | Unset = UNSET
     scored_by: PlannedPathOutScoredBy | Unset = PlannedPathOutScoredBy.OUTCOME_MODEL
     source: None | str | Unset = UNSET
@@ -102,6 +105,12 @@ class PlannedPathOut:
         else:
             expected_eps_t = self.expected_eps_t
 
+        height: float | None | Unset
+        if isinstance(self.height, Unset):
+            height = UNSET
+        else:
+            height = self.height
+
         p_forecast: float | None | Unset
         if isinstance(self.p_forecast, Unset):
             p_forecast = UNSET
@@ -136,6 +145,8 @@ class PlannedPathOut:
         })
         if expected_eps_t is not UNSET:
             field_dict["expected_eps_t"] = expected_eps_t
+        if height is not UNSET:
+            field_dict["height"] = height
         if p_forecast is not UNSET:
             field_dict["p_forecast"] = p_forecast
         if scored_by is not UNSET:
@@ -195,6 +206,16 @@ class PlannedPathOut:
         expected_eps_t = _parse_expected_eps_t(d.pop("expected_eps_t", UNSET))
 
 
+        def _parse_height(data: object) -> float | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            return cast(float | None | Unset, data)
+
+        height = _parse_height(d.pop("height", UNSET))
+
+
         def _parse_p_forecast(data: object) -> float | None | Unset:
             if data is None:
                 return data
@@ -237,6 +258,7 @@ class PlannedPathOut:
             p_distinguishing=p_distinguishing,
             p_informative=p_informative,
             expected_eps_t=expected_eps_t,
+            height=height,
             p_forecast=p_forecast,
             scored_by=scored_by,
             source=source,

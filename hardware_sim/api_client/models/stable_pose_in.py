@@ -11,6 +11,8 @@ from ..types import UNSET, Unset
 from ..types import UNSET, Unset
 from typing import cast
 
+if TYPE_CHECKING:
+  from ..models.slice_in import SliceIn
 
 
 
@@ -22,33 +24,30 @@ T = TypeVar("T", bound="StablePoseIn")
 
 @_attrs_define
 class StablePoseIn:
-    """ 
+    """ One stable pose: an `outline` (with holes), or `slices` at several probing
+    heights (DESIGN §4.13), the first at the default height; at most
+    `max_pose_faces` faces in all.
+
         Attributes:
-            outline (list[list[float]]): vertices
             holes (list[list[list[float]]] | Unset):
             normal_z (list[float] | None | Unset):
+            outline (list[list[float]] | None | Unset):
             probability (float | Unset):  Default: 1.0.
+            slices (list[SliceIn] | None | Unset):
      """
 
-    outline: list[list[float]]
     holes: list[list[list[float]]] | Unset = UNSET
     normal_z: list[float] | None | Unset = UNSET
+    outline: list[list[float]] | None | Unset = UNSET
     probability: float | Unset = 1.0
+    slices: list[SliceIn] | None | Unset = UNSET
 
 
 
 
 
     def to_dict(self) -> dict[str, Any]:
-        outline = []
-        for outline_item_data in self.outline:
-            outline_item = outline_item_data
-
-
-            outline.append(outline_item)
-
-
-
+        from ..models.slice_in import SliceIn # noqa: PLC0415
         holes: list[list[list[float]]] | Unset = UNSET
         if not isinstance(self.holes, Unset):
             holes = []
@@ -75,20 +74,51 @@ class StablePoseIn:
         else:
             normal_z = self.normal_z
 
+        outline: list[list[float]] | None | Unset
+        if isinstance(self.outline, Unset):
+            outline = UNSET
+        elif isinstance(self.outline, list):
+            outline = []
+            for outline_type_0_item_data in self.outline:
+                outline_type_0_item = outline_type_0_item_data
+
+
+                outline.append(outline_type_0_item)
+
+
+        else:
+            outline = self.outline
+
         probability = self.probability
+
+        slices: list[dict[str, Any]] | None | Unset
+        if isinstance(self.slices, Unset):
+            slices = UNSET
+        elif isinstance(self.slices, list):
+            slices = []
+            for slices_type_0_item_data in self.slices:
+                slices_type_0_item = slices_type_0_item_data.to_dict()
+                slices.append(slices_type_0_item)
+
+
+        else:
+            slices = self.slices
 
 
         field_dict: dict[str, Any] = {}
 
         field_dict.update({
-            "outline": outline,
         })
         if holes is not UNSET:
             field_dict["holes"] = holes
         if normal_z is not UNSET:
             field_dict["normal_z"] = normal_z
+        if outline is not UNSET:
+            field_dict["outline"] = outline
         if probability is not UNSET:
             field_dict["probability"] = probability
+        if slices is not UNSET:
+            field_dict["slices"] = slices
 
         return field_dict
 
@@ -96,15 +126,8 @@ class StablePoseIn:
 
     @classmethod
     def from_dict(cls: type[T], src_dict: Mapping[str, Any]) -> T:
+        from ..models.slice_in import SliceIn # noqa: PLC0415
         d = dict(src_dict)
-        outline = []
-        _outline = d.pop("outline")
-        for outline_item_data in (_outline):
-            outline_item = cast(list[float], outline_item_data)
-
-            outline.append(outline_item)
-
-
         _holes = d.pop("holes", UNSET)
         holes: list[list[list[float]]] | Unset = UNSET
         if _holes is not UNSET:
@@ -138,13 +161,62 @@ class StablePoseIn:
         normal_z = _parse_normal_z(d.pop("normal_z", UNSET))
 
 
+        def _parse_outline(data: object) -> list[list[float]] | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, list):
+                    raise TypeError()
+                outline_type_0 = []
+                _outline_type_0 = data
+                for outline_type_0_item_data in (_outline_type_0):
+                    outline_type_0_item = cast(list[float], outline_type_0_item_data)
+
+                    outline_type_0.append(outline_type_0_item)
+
+                return outline_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(list[list[float]] | None | Unset, data)
+
+        outline = _parse_outline(d.pop("outline", UNSET))
+
+
         probability = d.pop("probability", UNSET)
 
+        def _parse_slices(data: object) -> list[SliceIn] | None | Unset:
+            if data is None:
+                return data
+            if isinstance(data, Unset):
+                return data
+            try:
+                if not isinstance(data, list):
+                    raise TypeError()
+                slices_type_0 = []
+                _slices_type_0 = data
+                for slices_type_0_item_data in (_slices_type_0):
+                    slices_type_0_item = SliceIn.from_dict(slices_type_0_item_data)
+
+
+
+                    slices_type_0.append(slices_type_0_item)
+
+                return slices_type_0
+            except (TypeError, ValueError, AttributeError, KeyError):
+                pass
+            return cast(list[SliceIn] | None | Unset, data)
+
+        slices = _parse_slices(d.pop("slices", UNSET))
+
+
         stable_pose_in = cls(
-            outline=outline,
             holes=holes,
             normal_z=normal_z,
+            outline=outline,
             probability=probability,
+            slices=slices,
         )
 
         return stable_pose_in

@@ -25,6 +25,7 @@ def _get_kwargs(
     name: str,
     file_type: ImportMeshFileType | Unset = ImportMeshFileType.STL,
     max_poses: int | None | Unset = UNSET,
+    heights: list[float] | None | Unset = UNSET,
 
 ) -> dict[str, Any]:
     headers: dict[str, Any] = {}
@@ -50,6 +51,17 @@ def _get_kwargs(
     else:
         json_max_poses = max_poses
     params["max_poses"] = json_max_poses
+
+    json_heights: list[float] | None | Unset
+    if isinstance(heights, Unset):
+        json_heights = UNSET
+    elif isinstance(heights, list):
+        json_heights = heights
+
+
+    else:
+        json_heights = heights
+    params["heights"] = json_heights
 
 
     params = {k: v for k, v in params.items() if v is not UNSET and v is not None}
@@ -170,13 +182,16 @@ def sync_detailed(
     name: str,
     file_type: ImportMeshFileType | Unset = ImportMeshFileType.STL,
     max_poses: int | None | Unset = UNSET,
+    heights: list[float] | None | Unset = UNSET,
 
 ) -> Response[ObjectCreated | Problem]:
     """ Import Mesh
 
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
-    outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    outline (and at each of `heights`: slices at several probing heights, the
+    planner then chooses the height of each path), faces carrying their out-of-plane
+    normal. Same name, other geometry: 409.
     Content-Type application/octet-stream (or model/*, application/sla,
     application/vnd.ms-pki.stl); any other: 415.
 
@@ -185,6 +200,8 @@ def sync_detailed(
         name (str):
         file_type (ImportMeshFileType | Unset):  Default: ImportMeshFileType.STL.
         max_poses (int | None | Unset):
+        heights (list[float] | None | Unset): more probing heights: each stable pose is also
+            sliced there (at most max_slices heights in all, `height` included)
         body (File):
 
     Raises:
@@ -202,6 +219,7 @@ height=height,
 name=name,
 file_type=file_type,
 max_poses=max_poses,
+heights=heights,
 
     )
 
@@ -219,13 +237,16 @@ def sync(
     name: str,
     file_type: ImportMeshFileType | Unset = ImportMeshFileType.STL,
     max_poses: int | None | Unset = UNSET,
+    heights: list[float] | None | Unset = UNSET,
 
 ) -> ObjectCreated | Problem | None:
     """ Import Mesh
 
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
-    outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    outline (and at each of `heights`: slices at several probing heights, the
+    planner then chooses the height of each path), faces carrying their out-of-plane
+    normal. Same name, other geometry: 409.
     Content-Type application/octet-stream (or model/*, application/sla,
     application/vnd.ms-pki.stl); any other: 415.
 
@@ -234,6 +255,8 @@ def sync(
         name (str):
         file_type (ImportMeshFileType | Unset):  Default: ImportMeshFileType.STL.
         max_poses (int | None | Unset):
+        heights (list[float] | None | Unset): more probing heights: each stable pose is also
+            sliced there (at most max_slices heights in all, `height` included)
         body (File):
 
     Raises:
@@ -252,6 +275,7 @@ height=height,
 name=name,
 file_type=file_type,
 max_poses=max_poses,
+heights=heights,
 
     ).parsed
 
@@ -263,13 +287,16 @@ async def asyncio_detailed(
     name: str,
     file_type: ImportMeshFileType | Unset = ImportMeshFileType.STL,
     max_poses: int | None | Unset = UNSET,
+    heights: list[float] | None | Unset = UNSET,
 
 ) -> Response[ObjectCreated | Problem]:
     """ Import Mesh
 
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
-    outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    outline (and at each of `heights`: slices at several probing heights, the
+    planner then chooses the height of each path), faces carrying their out-of-plane
+    normal. Same name, other geometry: 409.
     Content-Type application/octet-stream (or model/*, application/sla,
     application/vnd.ms-pki.stl); any other: 415.
 
@@ -278,6 +305,8 @@ async def asyncio_detailed(
         name (str):
         file_type (ImportMeshFileType | Unset):  Default: ImportMeshFileType.STL.
         max_poses (int | None | Unset):
+        heights (list[float] | None | Unset): more probing heights: each stable pose is also
+            sliced there (at most max_slices heights in all, `height` included)
         body (File):
 
     Raises:
@@ -295,6 +324,7 @@ height=height,
 name=name,
 file_type=file_type,
 max_poses=max_poses,
+heights=heights,
 
     )
 
@@ -312,13 +342,16 @@ async def asyncio(
     name: str,
     file_type: ImportMeshFileType | Unset = ImportMeshFileType.STL,
     max_poses: int | None | Unset = UNSET,
+    heights: list[float] | None | Unset = UNSET,
 
 ) -> ObjectCreated | Problem | None:
     """ Import Mesh
 
      Register a 3-D part from its triangle mesh (the request body, at most the body
     limit): stable poses with their probabilities, each sliced at `height` into an
-    outline, faces carrying their out-of-plane normal. Same name, other geometry: 409.
+    outline (and at each of `heights`: slices at several probing heights, the
+    planner then chooses the height of each path), faces carrying their out-of-plane
+    normal. Same name, other geometry: 409.
     Content-Type application/octet-stream (or model/*, application/sla,
     application/vnd.ms-pki.stl); any other: 415.
 
@@ -327,6 +360,8 @@ async def asyncio(
         name (str):
         file_type (ImportMeshFileType | Unset):  Default: ImportMeshFileType.STL.
         max_poses (int | None | Unset):
+        heights (list[float] | None | Unset): more probing heights: each stable pose is also
+            sliced there (at most max_slices heights in all, `height` included)
         body (File):
 
     Raises:
@@ -345,5 +380,6 @@ height=height,
 name=name,
 file_type=file_type,
 max_poses=max_poses,
+heights=heights,
 
     )).parsed
