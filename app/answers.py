@@ -16,6 +16,9 @@ from app.schemas import (
 )
 
 __all__ = [
+    "ObjectCreated",
+    "ObjectList",
+    "ObjectOut",
     "PlanOut",
     "PlannedPathOut",
     "ReportBoundOut",
@@ -23,6 +26,8 @@ __all__ = [
     "ReportOut",
     "ReportResultOut",
     "ReportTouchOut",
+    "SliceOut",
+    "StablePoseOut",
     "ViewLinkOut",
 ]
 
@@ -152,3 +157,39 @@ class ViewLinkOut(BaseModel):
     url: str = Field(description="the page, with its token (relative to the service)")
     token: str = Field(description="opens the page's reads of this session only")
     expires_at: float = Field(description="Unix time after which the link is refused")
+
+
+class ObjectCreated(BaseModel):
+    name: str
+
+
+class SliceOut(BaseModel):
+    height: float
+    outline: list[Vec2Out]
+    holes: list[list[Vec2Out]] | None = None
+    normal_z: list[float] | None = None
+
+
+class StablePoseOut(BaseModel):
+    """One stable pose: its `outline` (with holes), or its `slices` at several
+    probing heights, the first at the default height."""
+
+    outline: list[Vec2Out] | None = None
+    holes: list[list[Vec2Out]] | None = None
+    probability: float
+    normal_z: list[float] | None = None
+    slices: list[SliceOut] | None = None
+
+
+class ObjectOut(BaseModel):
+    """An object in the §8 format (always the ``stable_poses`` form)."""
+
+    name: str
+    stable_poses: list[StablePoseOut]
+    prior: float | None = None
+
+
+class ObjectList(BaseModel):
+    """A §8 object file: every registered object, by name."""
+
+    objects: list[ObjectOut]

@@ -38,16 +38,11 @@ __all__ = [
     "Health",
     "HypothesisOut",
     "InputModels",
-    "ObjectCreated",
-    "ObjectList",
-    "ObjectOut",
     "ObservationOut",
     "PathOut",
     "PoseOut",
     "SensorOut",
     "SessionOut",
-    "SliceOut",
-    "StablePoseOut",
     "Status",
     "StrategyOut",
     "WorkspaceOut",
@@ -196,42 +191,6 @@ class SessionOut(BaseModel):
     prior: PriorOut | None = None
 
 
-class ObjectCreated(BaseModel):
-    name: str
-
-
-class SliceOut(BaseModel):
-    height: float
-    outline: list[Vec2Out]
-    holes: list[list[Vec2Out]] | None = None
-    normal_z: list[float] | None = None
-
-
-class StablePoseOut(BaseModel):
-    """One stable pose: its `outline` (with holes), or its `slices` at several
-    probing heights, the first at the default height."""
-
-    outline: list[Vec2Out] | None = None
-    holes: list[list[Vec2Out]] | None = None
-    probability: float
-    normal_z: list[float] | None = None
-    slices: list[SliceOut] | None = None
-
-
-class ObjectOut(BaseModel):
-    """An object in the §8 format (always the ``stable_poses`` form)."""
-
-    name: str
-    stable_poses: list[StablePoseOut]
-    prior: float | None = None
-
-
-class ObjectList(BaseModel):
-    """A §8 object file: every registered object, by name."""
-
-    objects: list[ObjectOut]
-
-
 class Health(BaseModel):
     status: str
 
@@ -314,7 +273,9 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
         holes: t.Holes = Field(default_factory=list)
         probability: Annotated[float, Field(gt=0, le=1)] = 1.0
         normal_z: t.NormalZ | None = None
-        slices: Annotated[list[SliceIn], Field(min_length=1, max_length=settings.max_slices)] | None = None
+        slices: (
+            Annotated[list[SliceIn], Field(min_length=1, max_length=settings.max_slices)] | None
+        ) = None
 
         @model_validator(mode="after")
         def _one_form(self) -> Any:

@@ -344,9 +344,9 @@ class StablePose:
         for k, z in enumerate(heights):
             if abs(z - height) <= HEIGHT_TOLERANCE * max(1.0, abs(z)):
                 return k
+        said = ", ".join(f"{z:g}" for z in heights)
         raise InvalidObservationError(
-            f"no slice at height {height:g} (this object's: {', '.join(f'{z:g}' for z in heights)})",
-            field="path.height",
+            f"no slice at height {height:g} (this stable pose's: {said})", field="path.height"
         )
 
     def layer(self, height: float | None) -> StablePose:

@@ -177,7 +177,9 @@ def cmd_import_mesh(args: argparse.Namespace) -> int:
 
     heights = ([] if args.height is None else [args.height]) + list(args.heights or [])
     if not heights:
-        raise SystemExit("import-mesh: give --height Z or --heights Z [Z ...]")
+        from planner.errors import InvalidModelError
+
+        raise InvalidModelError("give --height Z or --heights Z [Z ...]", field="height")
     model = import_mesh_file(args.mesh, heights[0], args.name, args.max_poses, heights[1:])
     text = json.dumps({"objects": [object_to_dict(model)]}, indent=1)
     if args.out:

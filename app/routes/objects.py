@@ -7,6 +7,7 @@ from urllib.parse import quote
 from fastapi import APIRouter, Path, Query, Request, Response
 from pydantic import Field
 
+from app.answers import ObjectCreated, ObjectList, ObjectOut
 from app.deps import ServiceDep, auth_dependencies
 from app.errors import (
     ConflictError,
@@ -16,14 +17,7 @@ from app.errors import (
     UnsupportedMediaTypeError,
 )
 from app.routes import PROBLEMS
-from app.schemas import (
-    MESH_MEDIA_TYPES,
-    NAME_PATTERN,
-    InputModels,
-    ObjectCreated,
-    ObjectList,
-    ObjectOut,
-)
+from app.schemas import MESH_MEDIA_TYPES, NAME_PATTERN, InputModels
 from app.settings import Settings
 from app.store_types import ObjectConflictError
 
@@ -150,9 +144,8 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         if not data:
             raise InvalidInputError("the request body must hold the mesh file", field="body")
         return await _registered(
-            response, service.import_mesh(
-                data, file_type, (height, *(heights or ())), name, max_poses
-            )
+            response,
+            service.import_mesh(data, file_type, (height, *(heights or ())), name, max_poses),
         )
 
     return router

@@ -37,9 +37,10 @@ import trimesh
 
 from planner.errors import InvalidModelError, ModelFileError
 from planner.geometry import point_segment_distance, polygon_centroid, signed_area
+from planner.models.congruence import COLLINEAR_TOLERANCE, congruent
 from planner.models.mesh_limits import MeshLimits
 from planner.models.outlines import make_stable_pose, with_slices
-from planner.types import ObjectModel
+from planner.types import ObjectModel, StablePose
 
 __all__ = [
     "COLLINEAR_TOLERANCE",
@@ -55,9 +56,6 @@ __all__ = [
     "stable_poses",
 ]
 
-#: Relative tolerance (of the slice's size) under which a vertex counts as lying
-#: on the line through its neighbours, and under which two slices coincide.
-COLLINEAR_TOLERANCE = 1e-6
 
 #: File types :func:`parse_mesh_bytes` accepts (trimesh's triangle-mesh formats).
 MESH_FILE_TYPES = frozenset({"glb", "gltf", "obj", "off", "ply", "stl"})
@@ -302,61 +300,6 @@ def slice_pose(
     return MeshSlice(outline=outline, holes=holes, normal_z=normal_z, offset=offset)
 
 
-def _rotation_to(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
-    """Angles (radians) of the best rotations about the origin taking the rows
-    of a (N, 2) onto b (N, 2) cyclically shifted by k, one per plausible shift k
-    (those that send a's first vertex to a vertex of b at the same radius)."""
-    n = len(a)
-    radius_a, radius_b = np.hypot(*a[0]), np.hypot(*b.T)
-    shifts = np.flatnonzero(np.abs(radius_b - radius_a) <= tol)
-    shifted = b[(shifts[:, None] + np.arange(n)[None, :]) % n]
-    # theta_k = atan2(sum_i a_i x b_(i+k), sum_i a_i . b_(i+k))
-    cross = np.sum(a[None, :, 0] * shifted[..., 1] - a[None, :, 1] * shifted[..., 0], axis=1)
-    dot = np.sum(a[None, :, 0] * shifted[..., 0] + a[None, :, 1] * shifted[..., 1], axis=1)
-    return np.arctan2(cross, dot)
-
-
-def _matches(points: np.ndarray, targets: np.ndarray, tol: float) -> np.ndarray | None:
-    """Index of the target within `tol` of each point, if that pairing is one-to-one."""
-    distance = np.hypot(*(points[:, None, :] - targets[None, :, :]).transpose(2, 0, 1))
-    nearest = np.argmin(distance, axis=1)
-    if np.any(distance[np.arange(len(points)), nearest] > tol):
-        return None
-    if len(np.unique(nearest)) != len(targets):
-        return None
-    return nearest
-
-
-def congruent(a: MeshSlice, b: MeshSlice, tol: float = COLLINEAR_TOLERANCE) -> bool:
-    """Whether two centred slices are one 2-D model: a rotation about the centroid
-    (a planar rigid motion, no mirroring) maps every vertex and face of `a` onto
-    one of `b` within `tol` times the size, with equal `normal_z` (within `tol`).
-
-    >>> square = MeshSlice(
-    ...     np.array([[1.0, -1], [1, 1], [-1, 1], [-1, -1]]), (), np.zeros(4), np.zeros(2)
-    ... )
-    >>> turned = MeshSlice(np.roll(square.outline, 1, axis=0), (), np.zeros(4), np.zeros(2))
-    >>> congruent(square, turned)
-    True
-    """
-    if len(a.outline) != len(b.outline) or sorted(map(len, a.holes)) != sorted(map(len, b.holes)):
-        return False
-    size = max(float(np.max(np.hypot(*a.outline.T))), 1e-300)
-    limit = tol * size
-    a_vertices, b_vertices = np.concatenate(a.rings), np.concatenate(b.rings)
-    a_middle = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in a.rings])
-    b_middle = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in b.rings])
-    for theta in _rotation_to(a.outline, b.outline, limit):
-        c, s = math.cos(theta), math.sin(theta)
-        rotation = np.array([[c, -s], [s, c]])
-        if _matches(a_vertices @ rotation.T, b_vertices, limit) is None:
-            continue
-        face = _matches(a_middle @ rotation.T, b_middle, limit)
-        if face is not None and np.allclose(a.normal_z, b.normal_z[face], atol=tol, rtol=0):
-            return True
-    return False
-
-
 def _check_height(height: float) -> float:
     try:
         value = float(height)
@@ -446,33 +389,48 @@ def object_from_mesh(
     order = np.argsort(-merged, kind="stable")[: max_poses or len(groups)]
     # P(pose | kept) = P(pose) / sum of P over the kept poses
     kept = merged[order] / merged[order].sum()
-    poses = []
-    for k, (g, probability) in enumerate(zip(order, kept, strict=True)):
-        first = groups[g][0]
-        representative = slices[first]
-        pose = make_stable_pose(
-            representative.outline,
-            representative.holes,
-            float(min(probability, 1.0)),
-            representative.normal_z.tolist(),
-            field=f"stable_poses[{k}].outline",
-        )
-        if extra:
-            # every layer in the frame of the default slice: p + offset is the posed point
-            shift = [u.offset - representative.offset for u in upper[first]]
-            layers = [
-                make_stable_pose(
-                    u.outline + s, [h + s for h in u.holes], pose.probability,
-                    u.normal_z.tolist(), field=f"stable_poses[{k}].slices[{j + 1}].outline",
-                )
-                for j, (u, s) in enumerate(zip(upper[first], shift, strict=True))
-            ]  # fmt: skip
-            pose = with_slices(
-                [(height, pose), *zip(extra, layers, strict=True)],
-                field=f"stable_poses[{k}].slices",
-            )
-        poses.append(pose)
+    poses = [
+        _pose(k, slices[groups[g][0]], upper[groups[g][0]], float(p), height, extra)
+        for k, (g, p) in enumerate(zip(order, kept, strict=True))
+    ]
     return ObjectModel(name=name, stable_poses=tuple(poses))
+
+
+def _pose(
+    k: int,
+    first: MeshSlice,
+    upper: list[MeshSlice],
+    probability: float,
+    height: float,
+    extra: list[float],
+) -> StablePose:
+    """Stable pose `k` of the model: its slice at `height` and, at each of the
+    `extra` heights, its `upper` slice in the frame of the first (a model point p
+    is the posed point p + first.offset at every height)."""
+    pose = make_stable_pose(
+        first.outline,
+        first.holes,
+        min(probability, 1.0),
+        first.normal_z.tolist(),
+        field=f"stable_poses[{k}].outline",
+    )
+    if not extra:
+        return pose
+    layers = []
+    for j, u in enumerate(upper):
+        shift = u.offset - first.offset
+        layers.append(
+            make_stable_pose(
+                u.outline + shift,
+                [h + shift for h in u.holes],
+                pose.probability,
+                u.normal_z.tolist(),
+                field=f"stable_poses[{k}].slices[{j + 1}].outline",
+            )
+        )
+    return with_slices(
+        [(height, pose), *zip(extra, layers, strict=True)], field=f"stable_poses[{k}].slices"
+    )
 
 
 def _extra_heights(height: float, heights: Sequence[float]) -> list[float]:
@@ -483,7 +441,6 @@ def _extra_heights(height: float, heights: Sequence[float]) -> list[float]:
         if all(abs(value - other) > 1e-6 * max(1.0, other) for other in [height, *out]):
             out.append(value)
     return out
-
 
 
 def import_mesh_bytes(

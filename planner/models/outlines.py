@@ -102,9 +102,7 @@ def make_stable_pose(
     )
 
 
-def with_slices(
-    layers: Sequence[tuple[float, StablePose]], *, field: str = "slices"
-) -> StablePose:
+def with_slices(layers: Sequence[tuple[float, StablePose]], *, field: str = "slices") -> StablePose:
     """One stable pose probed at several heights (DESIGN §4.13): `layers` are
     (height, outline) pairs, the first the default height's; the outlines come
     from :func:`make_stable_pose`, the first one's probability is the pose's.

@@ -108,3 +108,14 @@ def test_demo_that_runs_out_of_touches_exits_1(tmp_path, capsys):
     code, lines = _demo(tmp_path, capsys, "--max-touches", "1", "--out", str(tmp_path / "d.png"))
     assert code == 1
     assert any(line.startswith("not localized after 1 touches") for line in lines)
+
+
+def test_import_mesh_slices_at_several_heights(tmp_path):
+    mesh_path = tmp_path / "cube.stl"
+    trimesh.creation.box(extents=(40, 40, 40)).export(mesh_path)
+    out = tmp_path / "cube.json"
+    argv = ["import-mesh", str(mesh_path), "--heights", "5", "15", "30", "--out", str(out)]
+    assert main(argv) == 0
+    poses = json.loads(out.read_text())["objects"][0]["stable_poses"]
+    assert all([s["height"] for s in p["slices"]] == [5.0, 15.0, 30.0] for p in poses)
+    assert main(["import-mesh", str(mesh_path)]) == 2
