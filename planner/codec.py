@@ -85,16 +85,17 @@ def _optional(x: float | None) -> float | None:
 
 
 # -- observations -----------------------------------------------------------------------------
-def path_to_dict(path: SensingPath) -> dict[str, Any]:
+def path_to_dict(path: SensingPath, *, height: NormalZ = "known") -> dict[str, Any]:
     """``{"origin": [x, y], "direction": [dx, dy], "length": L}`` (direction a unit
-    vector), with ``"height": z`` when the path has a probing height."""
+    vector), with ``"height": z`` when the path has a probing height (`height`
+    ``"always"``: null without one, as the answers' schema has it)."""
     out: dict[str, Any] = {
         "origin": _vec(path.origin),
         "direction": _vec(path.direction),
         "length": float(path.length),
     }
-    if path.height is not None:
-        out["height"] = float(path.height)
+    if path.height is not None or height == "always":
+        out["height"] = None if path.height is None else float(path.height)
     return out
 
 
@@ -114,9 +115,10 @@ def contact_to_dict(
 
 def observation_to_dict(obs: Observation, *, normal_z: NormalZ = "known") -> dict[str, Any]:
     """``{"path": {...}, "contact": {...} | null}``: the body of ``POST
-    .../observations``, and the form the service stores."""
+    .../observations``, and the form the service stores (`normal_z` ``"always"``:
+    the answers' form, every optional field written)."""
     return {
-        "path": path_to_dict(obs.path),
+        "path": path_to_dict(obs.path, height="always" if normal_z == "always" else "known"),
         "contact": contact_to_dict(obs.contact, normal_z=normal_z),
     }
 

@@ -13,7 +13,7 @@ from collections.abc import Iterable, Sequence
 from planner.errors import InvalidObservationError
 from planner.types import HEIGHT_TOLERANCE, ObjectModel, StablePose
 
-__all__ = ["check_height", "models_at", "probing_heights"]
+__all__ = ["canonical_height", "check_height", "models_at", "probing_heights"]
 
 
 def _same(a: float, b: float) -> bool:
@@ -41,6 +41,17 @@ def probing_heights(models: Iterable[ObjectModel]) -> tuple[float | None, ...]:
     if len(defaults) == 1:
         common = [z for z in common if not _same(z, next(iter(defaults)))]
     return (None, *sorted(common))
+
+
+def canonical_height(models: Iterable[ObjectModel], height: float | None) -> float | None:
+    """`height` as :func:`probing_heights` names it: None when it is every sliced
+    stable pose's default height (or no pose is sliced)."""
+    if height is None:
+        return None
+    sliced = [p for m in models for p in m.stable_poses if p.heights is not None]
+    if all(_same(height, float(p.height)) for p in sliced):  # type: ignore[arg-type]
+        return None
+    return height
 
 
 def check_height(models: Sequence[ObjectModel], height: float | None) -> None:

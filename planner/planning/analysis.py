@@ -13,7 +13,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.models.heights import probing_heights
+from planner.models.heights import canonical_height, probing_heights
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.budget import Budget
 from planner.planning.candidate_generation import generate_candidates
@@ -97,7 +97,7 @@ def analyse(
         parts.append(
             _at_height(
                 hypotheses, at, height, extra, workspace, sensor, sensor_position, config, gen,
-                observations, budget, layer_offsets(hypotheses, by_name, height),
+                observations, budget, layer_offsets(hypotheses, by_name, height), by_name,
             )
         )  # fmt: skip
     cands = Candidates.concat([p[0] for p in parts])
@@ -137,6 +137,7 @@ def _at_height(
     observations: Sequence[Observation],
     budget: Budget,
     offsets: np.ndarray,
+    models: Mapping[str, ObjectModel],
 ) -> tuple[Candidates, Outcomes, np.ndarray, bool]:
     """Candidates at one probing height (`posed`: the hypotheses' outlines there),
     their outcomes (faces numbered as in each stable pose's `all_faces`), class
@@ -151,7 +152,7 @@ def _at_height(
         sensor_position=sensor_position,
         extra=Candidates.concat([*extra, features]),
     ).at_height(height)
-    here = [o for o in observations if o.path.height == height]
+    here = [o for o in observations if canonical_height(models.values(), o.path.height) == height]
     fresh = np.flatnonzero(~repeated_paths(cands, here, posed, sensor))
     if 0 < len(fresh) < len(cands):
         cands = cands.subset(fresh)

@@ -62,7 +62,7 @@ def forecast_distinguishing(
     budget = budget or Budget()
     # the ball tip's centre is what the session observes: cast the grown outlines
     models = grown_models(session.models_by_name, session.sensor.tip_radius)
-    posed = pose_hypotheses(hypotheses, models)
+    posed = pose_hypotheses(hypotheses, models, path.height)
     out = predict_outcomes(
         posed,
         np.array([path.origin]),

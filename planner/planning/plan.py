@@ -265,7 +265,9 @@ def _refining(
     once the touch is made (with today's disks every outcome is confusable)."""
     refine = refinement(hypotheses, models, found.posed, found.outcomes, contacts, sensor)
     gain = refine.current - refine.expected
-    ok = np.flatnonzero(gain > _REFINE_GAIN * refine.current)
+    # refining paths at the default height: their scores are worked out on its outlines
+    default = np.isnan(found.candidates.height)  # type: ignore[arg-type]
+    ok = np.flatnonzero((gain > _REFINE_GAIN * refine.current) & default)
     if not len(ok):
         return [], ranking.note
     order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]

@@ -89,7 +89,7 @@ def test_misses_and_out_of_plane_normals_encode_alike():
     answered = json.loads(fast)["observations"]
     assert answered[0] == {
         "index": 0,
-        "path": {"origin": [200.0, 5.0], "direction": [-1.0, 0.0], "length": 5.0},
+        "path": {"origin": [200.0, 5.0], "direction": [-1.0, 0.0], "length": 5.0, "height": None},
         "contact": None,
     }
     assert answered[1]["contact"] == {"point": [40.0, 0.0], "normal": [1.0, 0.0], "normal_z": 0.25}
@@ -133,7 +133,8 @@ def test_plan_numbers_take_the_schema_types_and_non_finite_scores_are_null():
         b'"direction":[-1.0,0.0],"length":400.0,"aim":[0.0,0.0],"family":"informative",'
         b'"p_distinguishing":1.0,"p_informative":1.0,"expected_pruning":0.0,'
         b'"expected_remaining":null,"motion_cost":null,"source":"general","expected_eps_t":2.0,'
-        b'"p_forecast":null,"scored_by":"outcome_model"}],"strategy":"pdm","note":null,'
+        b'"p_forecast":null,"scored_by":"outcome_model","height":null}],"strategy":"pdm",'
+        b'"note":null,'
         b'"candidates":7,"classes":2,"work":0.0,"stopped_by":null,"version":4}'
     )
 
