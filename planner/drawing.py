@@ -169,10 +169,10 @@ def draw_overlays(
     grown: Sequence[np.ndarray] = (),
 ) -> None:
     """Contacts with normal arrows, the safe circle, the sensor, and ranked paths
-    (rank 1 first) labelled with their P(DM) when given. World frame. With a ball
-    tip (`tip_radius`), each contact (the ball's centre) gets its ball, and the
-    `grown` rings (outlines grown by the radius, where the centre stops) are
-    drawn dashed."""
+    (rank 1 first) labelled with their P(DM) when given and their probing height
+    when they have one. World frame. With a ball tip (`tip_radius`), each contact
+    (the ball's centre) gets its ball, and the `grown` rings (outlines grown by the
+    radius, where the centre stops) are drawn dashed."""
     from matplotlib.patches import Circle
 
     for k, ring in enumerate(grown):
@@ -274,6 +274,9 @@ def _draw_paths(
         pdm = None if p_distinguishing is None else p_distinguishing[rank - 1]
         if pdm is not None:
             label += f"  P(DM)={pdm:.2f}"
+        height = getattr(path, "height", None)
+        if height is not None:  # a path at a probing height other than the default
+            label += f"  z={height:g}"
         # keep the label inside the picture: it extends from the rim toward the centre
         ha = "right" if direction[0] < -0.3 else "left" if direction[0] > 0.3 else "center"
         ax.text(
