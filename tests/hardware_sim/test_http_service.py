@@ -164,11 +164,13 @@ def test_an_observation_is_sent_in_the_form_the_service_stores(http, client):
     answered = http.get(f"/v1/sessions/{service.session_id}").json()["observations"]
     assert [{k: v for k, v in o.items() if k != "index"} for o in answered] == [
         {
-            "path": {"origin": [200.0, 0.0], "direction": [-1.0, 0.0], "length": 400.0},
+            "path": {"origin": [200.0, 0.0], "direction": [-1.0, 0.0], "length": 400.0}
+            | {"height": None},
             "contact": {"point": [40.0, 0.0], "normal": [1.0, 0.0], "normal_z": 0.25},
         },
         {
-            "path": {"origin": [200.0, 5.0], "direction": [-1.0, 0.0], "length": 5.0},
+            "path": {"origin": [200.0, 5.0], "direction": [-1.0, 0.0], "length": 5.0}
+            | {"height": None},
             "contact": None,
         },
     ]
