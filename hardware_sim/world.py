@@ -60,12 +60,6 @@ class World:
             self.pose.apply(layer.outline), [self.pose.apply(h) for h in layer.holes]
         )
 
-    def face_offset(self, height: float | None) -> int:
-        """Where the faces of the layer at `height` start in the stable pose's
-        `all_faces` (what the recognition's assignments index)."""
-        k = self.stable.layer_index(height)
-        return sum(len(p.faces) for p in self.stable.layers[:k])
-
     def first_contact(self, path: SensingPath) -> tuple[np.ndarray, int] | None:
         """Exact first contact point and face index (of the layer at the path's
         height) along `path`, or None on a miss."""
@@ -140,7 +134,7 @@ class World:
         normal = self.posed_faces(path.height)[2][face]
         angle = math.atan2(normal[1], normal[0]) + delta
         contact = Contact((float(point[0]), float(point[1])), (math.cos(angle), math.sin(angle)))
-        return Observation(path, contact), face + self.face_offset(path.height)
+        return Observation(path, contact), face + self.stable.layer_start(path.height)
 
     def hitting_path(self, rng: np.random.Generator) -> SensingPath:
         """A path from a random point of the safe circle aimed at a random point of the object."""

@@ -366,6 +366,10 @@ class StablePose:
         merged["ring"] = np.concatenate([f.ring + r for f, r in zip(parts, rings, strict=True)])
         return Faces(**merged)
 
+    def layer_start(self, height: float | None) -> int:
+        """Where the faces of the layer at `height` start among `all_faces`."""
+        return int(np.count_nonzero(self.face_layer < self.layer_index(height)))
+
     @cached_property
     def face_layer(self) -> np.ndarray:
         """(F_all,) the layer of each of `all_faces`."""

@@ -72,7 +72,9 @@ def object_from_dict(data: Any, *, field: str = "object") -> ObjectModel:
         if not isinstance(pose_data, Mapping) or ("outline" in pose_data) == (
             "slices" in pose_data
         ):
-            raise ModelFileError("must be an object with an 'outline' or 'slices'", field=pf)
+            raise ModelFileError(
+                "must be an object with exactly one of 'outline' and 'slices'", field=pf
+            )
         unknown = set(pose_data) - _POSE_KEYS
         if unknown:
             raise ModelFileError(f"unknown keys {sorted(unknown)}", field=pf)

@@ -114,14 +114,14 @@ def layer_offsets(
 ) -> np.ndarray:
     """(H,) where the faces of the layer at `height` start among each hypothesis'
     stable pose's `all_faces` (0 at the default height)."""
-    out = np.zeros(len(hypotheses), dtype=np.int64)
     if height is None:
-        return out
-    for i, h in enumerate(hypotheses):
-        pose = models[h.object].stable_poses[h.stable_pose]
-        k = pose.layer_index(height)
-        out[i] = sum(len(p.faces) for p in pose.layers[:k])
-    return out
+        return np.zeros(len(hypotheses), dtype=np.int64)
+    start = {
+        (name, k): p.layer_start(height)
+        for name, m in models.items()
+        for k, p in enumerate(m.stable_poses)
+    }
+    return np.array([start[h.object, h.stable_pose] for h in hypotheses], dtype=np.int64)
 
 
 def _at_height(
