@@ -34,6 +34,9 @@ __all__ = ["Analysis", "analyse", "as_generator", "models_by_name"]
 #: fewest candidates x hypotheses per block.
 _BLOCK = 16
 _BLOCK_ELEMENTS = 4096
+#: Faces per hypothesis up to which an outcome cell costs the reference `outcome_cell`
+#: (the shared polygon sets); beyond it the cost grows with the faces.
+_REFERENCE_FACES = 12
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,6 +154,7 @@ def _at_height(
         gen,
         sensor_position=sensor_position,
         extra=Candidates.concat([*extra, features]),
+        budget=None if budget.unlimited else budget,
     ).at_height(height)
     here = [o for o in observations if canonical_height(models.values(), o.path.height) == height]
     fresh = np.flatnonzero(~repeated_paths(cands, here, posed, sensor))
@@ -161,7 +165,13 @@ def _at_height(
     # anytime: candidates in blocks, best first (the strategy's own, extra, general);
     # when the budget runs out, the blocks done so far are the candidates
     size = max(_BLOCK, _BLOCK_ELEMENTS // len(posed))
-    block = len(cands) if budget.unlimited else size
+    # a cell costs more where the hypotheses have more faces than the reference sets
+    per_cell = max(1.0, posed.valid.sum() / max(len(posed), 1) / _REFERENCE_FACES)
+    if budget.unlimited:
+        block = len(cands)
+    else:  # the first block too keeps to what the budget has left (at least one path)
+        affordable = budget.affordable("outcome_cell") / (per_cell * len(posed))
+        block = size if affordable >= size else max(1, int(affordable))
     for lo in range(0, max(len(cands), 1), max(block, 1)):
         if outcomes and budget.exhausted():
             break
@@ -169,7 +179,7 @@ def _at_height(
         out = predict_outcomes(
             posed, part.origins, part.directions, part.lengths, sensor, config.outcome
         )
-        budget.spend("outcome_cell", len(part) * len(posed))
+        budget.spend("outcome_cell", len(part) * len(posed) * per_cell)
         bits.append(
             pin_families(
                 hypotheses,

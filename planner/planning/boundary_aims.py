@@ -21,6 +21,7 @@ from planner.planning.cast_faces import segment_distance
 from planner.types import SensorBounds
 
 if TYPE_CHECKING:
+    from planner.planning.budget import Budget
     from planner.planning.posed_set import PosedSet
 
 __all__ = ["PAIR_CHUNK", "boundary_aims"]
@@ -35,9 +36,14 @@ def boundary_aims(
     count: int,
     face_samples: int,
     rng: np.random.Generator,
+    budget: Budget | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Up to `count` points on posed faces where the classes' boundaries differ,
     weakest blocking first, from `face_samples` points examined per face.
+
+    With a `budget`, fewer points are examined when their (point, face) pairs would
+    cost more than it has left (sized in advance, so the same on any machine); the
+    pairs examined are spent from it.
 
     Returns (points (N, 2), outward normals (N, 2)).
     """
@@ -47,7 +53,11 @@ def boundary_aims(
     # the sample points (valid face x sample, in that order) are drawn before any is
     # made: hundreds of hypotheses of a round part with holes hold a million faces
     fh, ff = np.nonzero(posed.valid)
+    plan = _PairPlan.of(posed, sensor)
     total, limit = len(fh) * face_samples, 8 * count
+    if budget is not None:
+        affordable = budget.affordable("aim_pair") / plan.per_point
+        limit = limit if affordable >= limit else max(1, int(affordable))
     if total > limit:
         flat = np.sort(rng.choice(total, size=limit, replace=False))
     else:
@@ -58,7 +68,9 @@ def boundary_aims(
     pts = start + frac[sample, None] * (posed.end[owner, f] - start)
     normals = posed.normal[owner, f]
     shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
-    q, h = _blocking_pairs(posed, sensor, pts, owner, normals)
+    q, h, pairs = _blocking_pairs(posed, sensor, pts, owner, normals, plan)
+    if budget is not None:
+        budget.spend("aim_pair", pairs)
     shared[q, posed.cls[h]] = True
     strength = np.empty(len(pts))
     chunk = max(1, 1_000_000 // max(1, posed.valid.size))
@@ -77,15 +89,38 @@ def boundary_aims(
     return pts[chosen], normals[chosen]
 
 
+@dataclass(frozen=True)
+class _PairPlan:
+    """How points are paired with faces: the valid faces' normal angles, their
+    buckets (None: every face is a candidate) and the candidate pairs per point."""
+
+    face_angle: np.ndarray
+    buckets: _Buckets | None
+    per_point: int
+
+    @classmethod
+    def of(cls, posed: PosedSet, sensor: SensorBounds) -> _PairPlan:
+        fh, ff = np.nonzero(posed.valid)
+        face_angle = np.arctan2(posed.normal[fh, ff, 1], posed.normal[fh, ff, 0])
+        # turn <= n_tol + ANGLE_SLACK with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
+        widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
+        n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + SHARE_SLACK), 1e-12)))
+        buckets = None if n_buckets < 3 else _Buckets.of(posed, face_angle, n_buckets)
+        per_point = len(fh) if buckets is None else 3 * buckets.sorted_low.shape[1]
+        return cls(face_angle, buckets, max(1, per_point))
+
+
 def _blocking_pairs(
     posed: PosedSet,
     sensor: SensorBounds,
     pts: np.ndarray,
     owner: np.ndarray,
     normals: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
+    plan: _PairPlan,
+) -> tuple[np.ndarray, np.ndarray, int]:
     """(point, hypothesis) pairs where a face of the hypothesis blocks the point: within
-    the pose/sensor tolerance of it, with the same normal.
+    the pose/sensor tolerance of it, with the same normal; and how many candidate
+    (point, face) pairs were measured.
 
     Faces fall into buckets of normal angle at least as wide as the widest angle
     tolerance; in a bucket they are sorted by their extent along its direction n,
@@ -93,23 +128,22 @@ def _blocking_pairs(
     faces of a point's bucket and its two neighbours that pass this are measured.
     """
     fh, ff = np.nonzero(posed.valid)
-    face_angle = np.arctan2(posed.normal[fh, ff, 1], posed.normal[fh, ff, 0])
     angle = np.arctan2(normals[:, 1], normals[:, 0])
-    # turn <= n_tol + ANGLE_SLACK with n_tol = 2 phi + dtheta(h) + dtheta(g) <= widest
-    widest = 2 * sensor.normal_error + 2 * posed.rotation.max() + 2e-9
-    n_buckets = int(min(1024, 2 * np.pi // max(widest * (1 + SHARE_SLACK), 1e-12)))
     # points in chunks whose candidate pairs stay under PAIR_CHUNK: a round part with
     # holes, its rotation still free, pairs every point with a million faces
-    buckets = None if n_buckets < 3 else _Buckets.of(posed, face_angle, n_buckets)
-    per_point = len(fh) if buckets is None else 3 * buckets.sorted_low.shape[1]
-    step = max(1, PAIR_CHUNK // max(1, per_point))
+    step = max(1, PAIR_CHUNK // plan.per_point)
     found = [
-        _pairs_in(posed, sensor, pts, owner, angle, face_angle, fh, ff, buckets, lo, step)
+        _pairs_in(posed, sensor, pts, owner, angle, plan.face_angle, fh, ff, plan.buckets, lo, step)
         for lo in range(0, len(pts), step)
     ]
     if not found:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64)
-    return np.concatenate([q for q, _ in found]), np.concatenate([h for _, h in found])
+        return np.zeros(0, np.int64), np.zeros(0, np.int64), 0
+    pairs = sum(n for _, _, n in found)
+    return (
+        np.concatenate([q for q, _, _ in found]),
+        np.concatenate([h for _, h, _ in found]),
+        pairs,
+    )
 
 
 def _pairs_in(
@@ -124,8 +158,9 @@ def _pairs_in(
     buckets: _Buckets | None,
     lo: int,
     step: int,
-) -> tuple[np.ndarray, np.ndarray]:
-    """The blocking (point, hypothesis) pairs of the points lo .. lo + step."""
+) -> tuple[np.ndarray, np.ndarray, int]:
+    """The blocking (point, hypothesis) pairs of the points lo .. lo + step, and how
+    many candidate pairs were measured."""
     part = slice(lo, lo + step)
     pts, owner, angle = pts[part], owner[part], angle[part]
     if buckets is None:  # some tolerance spans a third of the directions: every face
@@ -138,12 +173,13 @@ def _pairs_in(
     n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
     turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
     keep = turn <= n_tol + ANGLE_SLACK
+    measured = len(q)
     q, face, h, g = q[keep], face[keep], h[keep], g[keep]
     p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
     s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
     dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
     ok = dist <= p_tol + LENGTH_SLACK * posed.scale
-    return q[ok] + lo, h[ok]
+    return q[ok] + lo, h[ok], measured
 
 
 @dataclass(frozen=True)

@@ -29,7 +29,9 @@ __all__ = ["UNIT_US", "Budget", "OutOfBudgetError"]
 #: (means; single items vary by 2-3x either way): one candidate x hypothesis outcome
 #: cell (candidate generation, cast, survivors), one node of the lookahead search, one
 #: leaf set valued one touch deep, and one recognition update in a forecast or a
-#: recognition-ranked path: a fixed part and a part per hypothesis it carries.
+#: recognition-ranked path: a fixed part and a part per hypothesis it carries. The
+#: aims of candidate generation: a (point, face) pair examined for a boundary aim,
+#: a posed face put into the intersection area, a grid point x posed face of it.
 UNIT_US: dict[str, float] = {
     "outcome_cell": 13.0,
     "search_node": 200.0,
@@ -37,6 +39,9 @@ UNIT_US: dict[str, float] = {
     "recognition_update": 8000.0,
     "recognition_hypothesis": 100.0,
     "simulated_touch": 5.0,
+    "aim_pair": 0.4,
+    "aim_face": 5.0,
+    "aim_cell": 0.008,
 }
 
 
@@ -69,6 +74,11 @@ class Budget:
         self.work = math.inf if work is None else float(work)
         if self.stopped_by == "work" and self.units <= self.work:
             self.stopped_by = None
+
+    def affordable(self, kind: str) -> float:
+        """How many more items of `kind` the work budget allows (inf: unlimited);
+        the stages that can be told their cost in advance size themselves by it."""
+        return max(0.0, self.work - self.units) / UNIT_US[kind]
 
     def spend_updates(self, count: int, hypotheses: int) -> None:
         """`count` recognition updates of a session carrying `hypotheses` hypotheses."""

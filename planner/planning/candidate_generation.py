@@ -28,6 +28,7 @@ from planner.planning.intersection_aims import intersection_aims
 from planner.types import SensorBounds, Workspace
 
 if TYPE_CHECKING:
+    from planner.planning.budget import Budget
     from planner.planning.posed_set import PosedSet
 
 __all__ = ["CandidateConfig", "candidate_cap", "generate_candidates"]
@@ -86,6 +87,7 @@ def generate_candidates(
     *,
     sensor_position: Sequence[float] | None = None,
     extra: Candidates | None = None,
+    budget: Budget | None = None,
 ) -> Candidates:
     """The candidate paths for a posed hypothesis set (world frame).
 
@@ -94,7 +96,8 @@ def generate_candidates(
     aims sit just inside a face (by twice the largest tolerance) and are
     approached head on and at +-`config.oblique`. Extra paths are kept whole and
     first; the general ones are deduped and, beyond `config.count`, subsampled
-    with `rng`.
+    with `rng`. With a `budget`, the aims are sized to the work it has left and
+    spend what they do.
     """
     config = config or CandidateConfig()
     rng = rng if rng is not None else np.random.default_rng(0)
@@ -106,7 +109,7 @@ def generate_candidates(
     start_angle = math.atan2(rel[1], rel[0]) if np.any(rel) else 0.0
     parts = []
 
-    ia = intersection_aims(posed, config.intersection_aims, config.grid)
+    ia = intersection_aims(posed, config.intersection_aims, config.grid, budget)
     if len(ia) and config.origins:
         origins = _ring_points(workspace, config.origins, start_angle)
         o = np.repeat(origins[None], len(ia), axis=0).reshape(-1, 2)
@@ -116,7 +119,9 @@ def generate_candidates(
         ok = length > LENGTH_SLACK * workspace.radius
         parts.append(_make(o[ok], span[ok] / length[ok, None], length[ok], a[ok], "intersection"))
 
-    points, normals = boundary_aims(posed, sensor, config.boundary_aims, config.face_samples, rng)
+    points, normals = boundary_aims(
+        posed, sensor, config.boundary_aims, config.face_samples, rng, budget
+    )
     if len(points):
         inset = 2 * (2 * sensor.position_error + posed.eps_t.max()) + 5e-3 * workspace.radius
         aims = points - inset * normals

@@ -8,6 +8,7 @@ empty. World frame, lengths in the object files' unit.
 
 from __future__ import annotations
 
+import math
 from typing import TYPE_CHECKING, Any
 
 import numpy as np
@@ -16,6 +17,7 @@ from planner.geometry import SHARE_SLACK
 from planner.planning.posed_set import CHUNK_ELEMENTS
 
 if TYPE_CHECKING:
+    from planner.planning.budget import Budget
     from planner.planning.posed_set import PosedSet
 
 __all__ = ["intersection_aims", "union_centre"]
@@ -88,21 +90,35 @@ def _rows_inside(posed: PosedSet, xs: np.ndarray, ys: np.ndarray) -> np.ndarray:
     return inside
 
 
-def intersection_aims(posed: PosedSet, count: int, grid: int) -> np.ndarray:
+def intersection_aims(
+    posed: PosedSet, count: int, grid: int, budget: Budget | None = None
+) -> np.ndarray:
     """Up to `count` spread points inside the intersection area (IA).
 
     The first is the IA centroid when it lies inside, else the IA's
     representative point. When the IA is empty, points inside the largest
-    weight of posed outlines stand in for it.
+    weight of posed outlines stand in for it. With a `budget`, the grid is
+    coarsened to what it has left, and the IA is skipped (no aims) when even
+    the intersection would cost more; what was done is spent from it.
     """
     if count == 0:
         return np.zeros((0, 2))
+    cells = posed.start.shape[0] * posed.start.shape[1]  # per grid point: hypotheses x faces
+    if budget is not None:
+        if budget.affordable("aim_face") < cells:
+            return np.zeros((0, 2))
+        budget.spend("aim_face", cells)
+        affordable = math.sqrt(budget.affordable("aim_cell") / max(cells, 1))
+        grid = grid if affordable >= grid else int(affordable)
+        budget.spend("aim_cell", grid * grid * cells)
     aims: list[np.ndarray] = []
     ia = _intersection(_polygons(posed))
     if not ia.is_empty and ia.area > 0:
         centroid = ia.centroid
         first = centroid if ia.contains(centroid) else ia.representative_point()
         aims.append(np.array(first.coords[0]))
+    if grid < 1:
+        return np.array(aims).reshape(-1, 2)
     pts = posed.start[posed.valid]
     lo, hi = pts.min(axis=0), pts.max(axis=0)
     axes = [np.linspace(lo[i], hi[i], grid + 2)[1:-1] for i in range(2)]

@@ -11,6 +11,7 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 
@@ -61,9 +62,10 @@ class PosedSet:
     def n_classes(self) -> int:
         return len(self.class_weight)
 
-    @property
+    @cached_property
     def scale(self) -> float:
-        """A length of the order of the scene (for relative numerical floors)."""
+        """A length of the order of the scene (for relative numerical floors; computed
+        once: a round part with holes holds a million posed faces)."""
         return float(max(1.0, np.abs(self.start[self.valid]).max(initial=0.0)))
 
 

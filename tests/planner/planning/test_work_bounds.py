@@ -1,0 +1,101 @@
+"""Candidate generation and casting keep to the work budget (DESIGN §4.12).
+
+A plan is sized by work counted in advance, never by the clock: the aims examine
+what the budget can pay for, the casting's first block is as many paths as it has
+left (at least one), and a cell costs more on parts with many faces.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from planner.models.library import parse_objects
+from planner.planning.analysis import analyse
+from planner.planning.boundary_aims import boundary_aims
+from planner.planning.budget import UNIT_US, Budget
+from planner.planning.config import StrategyConfig
+from planner.planning.intersection_aims import intersection_aims
+from planner.planning.posed_set import pose_hypotheses
+from planner.recognition.session import Session
+from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
+
+
+def gon(n: int, r: float, c: tuple[float, float] = (0.0, 0.0)) -> list[list[float]]:
+    t = np.linspace(0, 2 * np.pi, n, endpoint=False)
+    return [[c[0] + r * math.cos(a), c[1] + r * math.sin(a)] for a in t]
+
+
+@pytest.fixture(scope="module")
+def holey():
+    """A round part with holes touched once: many hypotheses of many faces."""
+    holes = [gon(40, 4, (-30 + 20 * (i % 4), -30 + 20 * (i // 4)))[::-1] for i in range(16)]
+    models = parse_objects(
+        {"objects": [{"name": "holey", "outline": gon(160, 60), "holes": holes}]}
+    )
+    session = Session(models, SensorBounds(1.0, math.radians(3)), Workspace((0, 0), 200))
+    session = session.observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -60), (0, -1)))
+    )
+    return session, pose_hypotheses(session.hypotheses, session.models_by_name)
+
+
+def test_boundary_aims_examine_only_what_the_budget_pays_for(holey):
+    session, posed = holey
+    free = boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
+    unlimited = Budget()
+    same = boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3), unlimited)
+    np.testing.assert_array_equal(free[0], same[0])
+    full = unlimited.spent["aim_pair"]
+    assert full > 0
+    small = Budget(work=full * UNIT_US["aim_pair"] / 10)
+    few = boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3), small)
+    assert 0 < small.spent["aim_pair"] <= full / 10
+    assert len(few[0]) <= len(free[0])
+
+
+def test_intersection_aims_coarsen_then_give_up_with_the_budget(holey):
+    _, posed = holey
+    cells = posed.start.shape[0] * posed.start.shape[1]
+    assert len(intersection_aims(posed, 8, 24, Budget(work=cells * UNIT_US["aim_face"] / 2))) == 0
+    tight = Budget(work=cells * (UNIT_US["aim_face"] + 4 * UNIT_US["aim_cell"]))
+    aims = intersection_aims(posed, 8, 24, tight)
+    assert tight.spent["aim_cell"] <= 4 * cells and len(aims) >= 1
+    assert len(intersection_aims(posed, 8, 24)) >= len(aims)
+
+
+@pytest.mark.parametrize("work", [20_000.0, 200_000.0])
+def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(holey, work):
+    session, posed = holey
+    budget = Budget(work=work)
+    found = analyse(
+        session.hypotheses,
+        session.models,
+        session.bounds,
+        session.workspace,
+        (200, 0),
+        StrategyConfig(),
+        0,
+        observations=session.observations,
+        budget=budget,
+    )
+    assert len(found.candidates) >= 1
+    per_path = len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
+    # each stage is sized before it starts: past the budget only by the first path cast
+    assert budget.units <= work + per_path
+    # the count is the work: the same request spends the same units again
+    again = Budget(work=work)
+    analyse(
+        session.hypotheses,
+        session.models,
+        session.bounds,
+        session.workspace,
+        (200, 0),
+        StrategyConfig(),
+        0,
+        observations=session.observations,
+        budget=again,
+    )
+    assert again.spent == budget.spent
