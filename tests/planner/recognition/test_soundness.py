@@ -30,7 +30,7 @@ BOUNDS = {
     # a 3 mm ball tip reporting its centre (DESIGN §4.14)
     "ball": SensorBounds(1.0, math.radians(3.0), tip_radius=3.0),
 }
-CASES = 300
+CASES = 200
 
 
 def _true_hypotheses(session, world, faces):
