@@ -30,6 +30,10 @@ outline's distance from a few fixed probe points (points of the most probable
 outline). A point x of A's faces nearest a probe q lies within g/2 of a sample
 of A (g: the longest gap between samples), which lies within d of B's faces:
 the two distances from q differ by at most d + g/2, scaled to the tree's reach.
+A first tree over a few of these keys finds the pairs, which are then held to
+all of them (a tree over forty-odd keys is slow); when there are few, every
+pair is decided in one pass before the leaders take their classes, otherwise
+(a round part's rotations) each leader measures only what is left.
 
 Each candidate pair is then decided without measuring every point against every
 face: the points of one outline, moved into the other's model frame, query one
@@ -58,11 +62,14 @@ __all__ = [
     "BRUTE_FORCE_FACES",
     "CHUNK_ELEMENTS",
     "MAX_TREE_POINTS",
+    "PAIR_BATCH",
     "SUPPORT_DIRECTIONS",
     "SYMMETRY_FLOOR",
     "PosedRings",
     "equivalence_classes",
     "outline_distance",
+    "pair_distances",
+    "pairs_within",
     "within",
 ]
 
@@ -84,10 +91,18 @@ SCREEN_POINTS = 64
 #: points along its boundary.
 PROBE_GRID = 5
 PROBES = 8
+#: The most candidate pairs decided in one batch before the classes are formed;
+#: beyond it (a round part, whose rotations are all near one another) each leader
+#: decides its own, and no member of a class is measured again.
+PAIR_BATCH = 200_000
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
 SUPPORT_DIRECTIONS = np.column_stack(
     [np.cos(np.arange(12) * np.pi / 6), np.sin(np.arange(12) * np.pi / 6)]
 )
+#: The columns of the screening keys a first k-d tree holds: the support values
+#: at 0, 90, 180 and 270 degrees (the outline's box), the distance from the centre
+#: of the probe grid and from the last probe along the boundary.
+FIRST_KEYS = np.array([0, 3, 6, 9, len(SUPPORT_DIRECTIONS) + PROBE_GRID**2 // 2, -1])
 
 
 @dataclass(frozen=True, eq=False)
@@ -181,18 +196,21 @@ def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> 
     """Distance of hypothesis `i` of `a` to each hypothesis `rows` of `b`: the larger
     of the two directed boundary-to-face distances between their posed outlines."""
     rows = np.asarray(rows, dtype=np.int64)
-    # rows in chunks of at most CHUNK_ELEMENTS point x face pairs: a round outline has
+    return pair_distances(a, np.full(len(rows), i, np.int64), b, rows)
+
+
+def pair_distances(a: PosedRings, ia: np.ndarray, b: PosedRings, ib: np.ndarray) -> np.ndarray:
+    """(M,) :func:`outline_distance` of each pair: hypothesis ia[m] of `a` and ib[m] of `b`."""
+    ia, ib = np.asarray(ia, dtype=np.int64), np.asarray(ib, dtype=np.int64)
+    # pairs in chunks of at most CHUNK_ELEMENTS point x face pairs: a round outline has
     # hundreds of faces, and all its rotations are near one another
     cells = a.points.shape[1] * b.starts.shape[1] + b.points.shape[1] * a.starts.shape[1]
     step = max(1, CHUNK_ELEMENTS // max(1, cells))
-    out = np.zeros(len(rows))
-    for lo in range(0, len(rows), step):
-        part = rows[lo : lo + step]
-        one = np.broadcast_to(a.points[i], (len(part), *a.points[i].shape))
-        starts = np.broadcast_to(a.starts[i], (len(part), *a.starts[i].shape))
-        ends = np.broadcast_to(a.ends[i], (len(part), *a.ends[i].shape))
-        there = _to_faces(one, b.starts[part], b.ends[part])
-        back = _to_faces(b.points[part], starts, ends)
+    out = np.zeros(len(ia))
+    for lo in range(0, len(ia), step):
+        pa, pb = ia[lo : lo + step], ib[lo : lo + step]
+        there = _to_faces(a.points[pa], b.starts[pb], b.ends[pb])
+        back = _to_faces(b.points[pb], a.starts[pa], a.ends[pa])
         out[lo : lo + step] = np.maximum(there, back)
     return out
 
@@ -237,27 +255,31 @@ def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float)
     """(len(rows),) bool: ``outline_distance(a, i, b, rows) <= limit``, the same
     answer, found through the k-d trees (see the module's note)."""
     rows = np.asarray(rows, dtype=np.int64)
-    out = np.zeros(len(rows), dtype=bool)
+    return pairs_within(a, np.full(len(rows), i, np.int64), b, rows, limit)
+
+
+def pairs_within(
+    a: PosedRings, ia: np.ndarray, b: PosedRings, ib: np.ndarray, limit: float
+) -> np.ndarray:
+    """(M,) bool: ``pair_distances(a, ia, b, ib) <= limit``, through the k-d trees."""
+    ia, ib = np.asarray(ia, dtype=np.int64), np.asarray(ib, dtype=np.int64)
+    out = np.zeros(len(ia), dtype=bool)
     if not math.isfinite(limit) or limit < 0:
-        return out if limit < 0 else np.ones(len(rows), dtype=bool)
+        return out if limit < 0 else np.ones(len(ia), dtype=bool)
     faces = max(a.starts.shape[1], b.starts.shape[1])
     if faces <= BRUTE_FORCE_FACES or b.tree(limit / 2)[1] > limit or a.tree(limit / 2)[1] > limit:
         # few faces: measuring every point against every face is cheaper than a tree;
         # a tree coarser than the threshold would leave nearly every point to measure
-        return outline_distance(a, i, b, rows) <= limit
+        return pair_distances(a, ia, b, ib) <= limit
     # a spread few of each outline's points first: a pair one of them fails is decided
     few_a, few_b = _spread(a.points.shape[1]), _spread(b.points.shape[1])
     step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
-    for lo in range(0, len(rows), step):
-        part = rows[lo : lo + step]
-        ok = _all_within(
-            np.broadcast_to(a.points[i, few_a], (len(part), len(few_a), 2)), b, part, limit
-        )
-        ok[ok] = _all_within(b.points[part[ok]][:, few_b], a, np.full(ok.sum(), i), limit)
-        ok[ok] = _all_within(
-            np.broadcast_to(a.points[i], (int(ok.sum()), *a.points[i].shape)), b, part[ok], limit
-        )
-        ok[ok] = _all_within(b.points[part[ok]], a, np.full(ok.sum(), i), limit)
+    for lo in range(0, len(ia), step):
+        pa, pb = ia[lo : lo + step], ib[lo : lo + step]
+        ok = _all_within(a.points[pa][:, few_a], b, pb, limit)
+        ok[ok] = _all_within(b.points[pb[ok]][:, few_b], a, pa[ok], limit)
+        ok[ok] = _all_within(a.points[pa[ok]], b, pb[ok], limit)
+        ok[ok] = _all_within(b.points[pb[ok]], a, pa[ok], limit)
         out[lo : lo + step] = ok
     return out
 
@@ -303,6 +325,16 @@ def _screen_keys(rings: Sequence[PosedRings], leader: tuple[int, int], tau: floa
     return np.hstack([support, _probe_distances(rings, probes) * scale])
 
 
+def _keys_within(keys: np.ndarray, pairs: np.ndarray, reach: float) -> np.ndarray:
+    """(M,) bool: are the keys of each pair (M, 2) within `reach` in every column?"""
+    out = np.zeros(len(pairs), dtype=bool)
+    step = max(1, CHUNK_ELEMENTS // max(1, keys.shape[1]))
+    for lo in range(0, len(pairs), step):
+        i, j = pairs[lo : lo + step, 0], pairs[lo : lo + step, 1]
+        out[lo : lo + step] = np.abs(keys[i] - keys[j]).max(axis=1) <= reach
+    return out
+
+
 def equivalence_classes(
     rings: Sequence[PosedRings], order: np.ndarray, family: np.ndarray, tau: float
 ) -> np.ndarray:
@@ -323,20 +355,73 @@ def equivalence_classes(
     order = np.asarray(order, dtype=np.int64)
     first = int(order[0])
     keys = _screen_keys(rings, (int(group[first]), int(local[first])), tau)
-    tree = cKDTree(keys)
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(keys).max()))
-    classes = 0
-    for leader in order:
-        if label[leader] >= 0:
-            continue
-        label[leader] = classes
-        near = np.asarray(tree.query_ball_point(keys[leader], r=reach, p=np.inf), np.int64)
-        near = near[(label[near] < 0) & (family[near] != family[leader])]
-        g = group[leader]
-        for h in np.unique(group[near]):
-            mine = near[group[near] == h]
-            close = within(rings[g], local[leader], rings[h], local[mine], tau / 2)
-            label[mine[close]] = classes
-        classes += 1
-    return label
+    ctx = _Leading(rings, group, local, family, label, tau)
+    # pairs first found in a few of the keys (a tree in all of them is slow), then
+    # held to all: the same pairs as one tree over every key
+    low = keys[:, FIRST_KEYS]
+    first_tree = cKDTree(low)
+    count = int(first_tree.query_ball_point(low, r=reach, p=np.inf, return_length=True).sum())
+    if count - n <= 2 * PAIR_BATCH:
+        found = first_tree.query_pairs(reach, p=np.inf, output_type="ndarray")
+        ctx.lead_decided(order, found[_keys_within(keys, found, reach)])
+    else:
+        ctx.lead_lazily(order, cKDTree(keys), keys, reach)
+    label[label < 0] = np.flatnonzero(label < 0)
+    # classes numbered as their leaders come in `order` (a leader precedes its members)
+    place = np.empty(n, dtype=np.int64)
+    place[order] = np.arange(n)
+    return np.unique(place[label], return_inverse=True)[1].reshape(-1)
+
+
+@dataclass(frozen=True, eq=False)
+class _Leading:
+    """Leaders taking in their classes: `label` (N,) is filled with each
+    hypothesis' leader (-1 while none has taken it)."""
+
+    rings: Sequence[PosedRings]
+    group: np.ndarray
+    local: np.ndarray
+    family: np.ndarray
+    label: np.ndarray
+    tau: float
+
+    def lead_decided(self, order: np.ndarray, found: np.ndarray) -> None:
+        """Few candidate pairs `found` (M, 2) (parts without a continuous symmetry):
+        every pair decided in one pass per two stable poses, then the leaders in
+        `order` take in the unlabelled hypotheses they are close to."""
+        group, local, label = self.group, self.local, self.label
+        found = found[self.family[found[:, 0]] != self.family[found[:, 1]]]
+        close = np.zeros(len(found), dtype=bool)
+        key = group[found[:, 0]] * len(self.rings) + group[found[:, 1]]
+        for k in np.unique(key):
+            sel = np.flatnonzero(key == k)
+            a, b = found[sel, 0], found[sel, 1]
+            ra, rb = self.rings[group[a[0]]], self.rings[group[b[0]]]
+            close[sel] = pairs_within(ra, local[a], rb, local[b], self.tau / 2)
+        edges = np.concatenate([found[close], found[close][:, ::-1]])
+        edges = edges[np.argsort(edges[:, 0], kind="stable")]
+        starts = np.searchsorted(edges[:, 0], np.arange(len(label) + 1))
+        for leader in order[np.diff(starts)[order] > 0]:
+            if label[leader] >= 0:
+                continue
+            near = edges[starts[leader] : starts[leader + 1], 1]
+            label[leader] = leader
+            label[near[label[near] < 0]] = leader
+
+    def lead_lazily(self, order: np.ndarray, tree: cKDTree, keys: np.ndarray, reach: float) -> None:
+        """Many candidate pairs (a round part's rotations, all near one another):
+        each leader in `order` measures only the hypotheses no class has taken."""
+        group, local, label = self.group, self.local, self.label
+        for leader in order:
+            if label[leader] >= 0:
+                continue
+            label[leader] = leader
+            near = np.asarray(tree.query_ball_point(keys[leader], r=reach, p=np.inf), np.int64)
+            near = near[(label[near] < 0) & (self.family[near] != self.family[leader])]
+            ring = self.rings[group[leader]]
+            for h in np.unique(group[near]):
+                mine = near[group[near] == h]
+                close = within(ring, local[leader], self.rings[h], local[mine], self.tau / 2)
+                label[mine[close]] = leader
