@@ -31,6 +31,9 @@ from planner.types import Faces, Observation, Workspace
 
 __all__ = ["clear_paths", "free_space_check", "inside_workspace", "model_check"]
 
+#: The most (pose, path) segments one pass of the free-space check holds.
+CHECK_PAIRS = 200_000
+
 
 def model_check(
     faces: Faces,
@@ -116,24 +119,35 @@ def clear_paths(
 ) -> np.ndarray:
     """`keep` (N,) and, for each pose (`theta`, `t`, N rows), every path clear of
     the posed outline shrunk by `shrink`: up to each contact the row assigns
-    (`assigned` (N, s)), less `back`, and each missed path whole."""
+    (`assigned` (N, s)), less `back`, and each missed path whole. Every (row, path)
+    pair is one segment of a single pass per path height and shrink."""
     keep = keep.copy()
-    contact_col = 0
-    for obs in observations:
-        o, d = np.asarray(obs.path.origin), np.asarray(obs.path.direction)
-        if obs.contact is None:
-            reach_len = obs.path.length
-            check = keep.copy()
-        else:
-            reach_len = float((np.asarray(obs.contact.point) - o) @ d) - back
-            check = keep & assigned[:, contact_col]
-            contact_col += 1
-        idx = np.flatnonzero(check)
-        if idx.size:
-            layer = group.stable.layer_index(obs.path.height)
-            keep[idx] &= _free_space_ok(
-                group, theta[idx], t[idx], shrink[idx], o, d, reach_len, floor, layer
-            )
+    if not observations or not keep.any():
+        return keep
+    origin = np.array([o.path.origin for o in observations], dtype=float)
+    direction = np.array([o.path.direction for o in observations], dtype=float)
+    hit = np.array([o.contact is not None for o in observations])
+    length = np.array([o.path.length for o in observations], dtype=float)
+    points = np.array([o.contact.point if o.contact else (0.0, 0.0) for o in observations])
+    length[hit] = np.einsum("ki,ki->k", points[hit] - origin[hit], direction[hit]) - back
+    layer = np.array([group.stable.layer_index(o.path.height) for o in observations])
+    # which rows check which path: a missed path always, a contact's path where
+    # the row assigns that contact to a face
+    check = np.broadcast_to(~hit, (len(keep), len(observations))).copy()
+    check[:, hit] = assigned[:, : int(hit.sum())]
+    check &= keep[:, None] & (length > 0)[None, :]
+    bucket = _tol_bucket(shrink, floor)
+    rows, paths = np.nonzero(check)
+    for lo in range(0, len(rows), CHECK_PAIRS):
+        i, k = rows[lo : lo + CHECK_PAIRS], paths[lo : lo + CHECK_PAIRS]
+        R = rotation_matrices(theta[i])
+        a = np.einsum("nji,nj->ni", R, origin[k] - t[i])
+        b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
+        lines = shapely.linestrings(np.stack([a, b], axis=1))
+        for z, value in set(zip(layer[k].tolist(), bucket[i].tolist(), strict=True)):
+            sel = np.flatnonzero((layer[k] == z) & (bucket[i] == value))
+            crossed = shapely.intersects(lines[sel], group.shrunk(float(value), z))
+            keep[i[sel[crossed]]] = False
     return keep
 
 
@@ -141,31 +155,3 @@ def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
     """Round tolerances UP onto a geometric grid (sound: a larger shrink is more lenient)."""
     tol = np.maximum(tol, floor)
     return floor * 1.15 ** np.ceil(np.log(tol / floor) / math.log(1.15) - SHARE_SLACK)
-
-
-def _free_space_ok(
-    group: Group,
-    theta: np.ndarray,
-    t: np.ndarray,
-    shrink: np.ndarray,
-    origin: np.ndarray,
-    direction: np.ndarray,
-    length: float,
-    floor: float,
-    layer: int = 0,
-) -> np.ndarray:
-    """Does the segment origin -> origin + length*direction avoid the posed outline
-    of `layer` (the path's height) shrunk by `shrink` (per sample)? Checked in the
-    model frame, vectorized."""
-    if length <= 0:
-        return np.ones(len(theta), dtype=bool)
-    R = rotation_matrices(theta)
-    a = np.einsum("nji,nj->ni", R, origin - t)
-    b = np.einsum("nji,nj->ni", R, origin + length * direction - t)
-    lines = shapely.linestrings(np.stack([a, b], axis=1))
-    bucket = _tol_bucket(shrink, floor)
-    ok = np.ones(len(theta), dtype=bool)
-    for value in np.unique(bucket):
-        idx = np.flatnonzero(bucket == value)
-        ok[idx] = ~shapely.intersects(lines[idx], group.shrunk(float(value), layer))
-    return ok
