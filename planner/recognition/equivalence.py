@@ -91,10 +91,12 @@ SCREEN_POINTS = 64
 #: points along its boundary.
 PROBE_GRID = 5
 PROBES = 8
-#: The most candidate pairs decided in one batch before the classes are formed;
-#: beyond it (a round part, whose rotations are all near one another) each leader
-#: decides its own, and no member of a class is measured again.
-PAIR_BATCH = 200_000
+#: The most candidate pairs per hypothesis decided in one batch before the classes
+#: are formed, on outlines of at most BRUTE_FORCE_FACES faces (a part's discrete
+#: symmetries: a square's four rotations); beyond it, or on outlines with more
+#: faces (a round part, whose rotations are all near one another, each pair dear),
+#: each leader decides its own, and no member of a class is measured again.
+PAIR_BATCH = 8
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
 SUPPORT_DIRECTIONS = np.column_stack(
     [np.cos(np.arange(12) * np.pi / 6), np.sin(np.arange(12) * np.pi / 6)]
@@ -276,8 +278,8 @@ def pairs_within(
     step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
     for lo in range(0, len(ia), step):
         pa, pb = ia[lo : lo + step], ib[lo : lo + step]
-        ok = _all_within(a.points[pa][:, few_a], b, pb, limit)
-        ok[ok] = _all_within(b.points[pb[ok]][:, few_b], a, pa[ok], limit)
+        ok = _all_within(a.points[pa[:, None], few_a], b, pb, limit)
+        ok[ok] = _all_within(b.points[pb[ok][:, None], few_b], a, pa[ok], limit)
         ok[ok] = _all_within(a.points[pa[ok]], b, pb[ok], limit)
         ok[ok] = _all_within(b.points[pb[ok]], a, pa[ok], limit)
         out[lo : lo + step] = ok
@@ -363,7 +365,8 @@ def equivalence_classes(
     low = keys[:, FIRST_KEYS]
     first_tree = cKDTree(low)
     count = int(first_tree.query_ball_point(low, r=reach, p=np.inf, return_length=True).sum())
-    if count - n <= 2 * PAIR_BATCH:
+    cheap = max(r.starts.shape[1] for r in rings) <= BRUTE_FORCE_FACES
+    if cheap and count - n <= 2 * PAIR_BATCH * n:
         found = first_tree.query_pairs(reach, p=np.inf, output_type="ndarray")
         ctx.lead_decided(order, found[_keys_within(keys, found, reach)])
     else:
