@@ -144,9 +144,14 @@ def clear_paths(
         a = np.einsum("nji,nj->ni", R, origin[k] - t[i])
         b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
         lines = shapely.linestrings(np.stack([a, b], axis=1))
-        for z, value in set(zip(layer[k].tolist(), bucket[i].tolist(), strict=True)):
-            sel = np.flatnonzero((layer[k] == z) & (bucket[i] == value))
-            crossed = shapely.intersects(lines[sel], group.shrunk(float(value), z))
+        # one pass per (height, shrink): the segments sorted by it and split
+        kinds, which = np.unique(
+            np.column_stack([layer[k], bucket[i]]), axis=0, return_inverse=True
+        )
+        which = which.reshape(-1)
+        ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
+        for (z, value), sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
+            crossed = shapely.intersects(lines[sel], group.shrunk(float(value), int(z)))
             keep[i[sel[crossed]]] = False
     return keep
 
