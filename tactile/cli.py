@@ -147,14 +147,19 @@ def cmd_demo(args: argparse.Namespace) -> int:
 
     from app.serve import serve_in_thread
     from app.settings import Settings
+    from hardware_sim.http_service import ServiceError
     from tactile.demo import run_demo
 
     objects = args.objects if args.objects.endswith(".json") else embedded_set(args.objects)
     picture = Path(args.out)
 
     def demo(url: str) -> int:
-        code = run_demo(url, str(objects), args.seed, args.max_touches, sys.stdout, picture,
-                        args.sensor, report=args.report)  # fmt: skip
+        try:
+            code = run_demo(url, str(objects), args.seed, args.max_touches, sys.stdout, picture,
+                            args.sensor, report=args.report)  # fmt: skip
+        except ServiceError as exc:  # the service refused the objects (a limit, a field)
+            print(f"tactile: error: {exc}", file=sys.stderr)
+            return 2
         if args.linger > 0:
             print(f"serving for {args.linger:g} s more (Ctrl-C stops)", flush=True)
             with contextlib.suppress(KeyboardInterrupt):

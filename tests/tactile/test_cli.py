@@ -3,9 +3,11 @@
 from __future__ import annotations
 
 import json
+import math
 import re
 from xml.etree import ElementTree
 
+import numpy as np
 import pytest
 import trimesh
 
@@ -108,6 +110,15 @@ def test_demo_that_runs_out_of_touches_exits_1(tmp_path, capsys):
     code, lines = _demo(tmp_path, capsys, "--max-touches", "1", "--out", str(tmp_path / "d.png"))
     assert code == 1
     assert any(line.startswith("not localized after 1 touches") for line in lines)
+
+
+def test_demo_with_objects_the_service_refuses_names_the_limit(tmp_path, capsys):
+    ring = [[40 * math.cos(a), 40 * math.sin(a)] for a in np.linspace(0, 6.28, 600)]
+    path = tmp_path / "big.json"
+    path.write_text(json.dumps({"objects": [{"name": "big", "outline": ring}]}))
+    assert main(["demo", "--objects", str(path), "--out", str(tmp_path / "d.png")]) == 2
+    err = capsys.readouterr().err
+    assert "422" in err and "outline" in err and "500" in err
 
 
 def test_import_mesh_slices_at_several_heights(tmp_path):
