@@ -26,6 +26,9 @@ host wrote first is answered instead).
 
 The schema is migrated with alembic at :meth:`Store.open` (:mod:`app.migrations`).
 The methods are blocking; the service calls them from worker threads.
+
+Sessions and objects carry their owner, the client whose key created them
+(``''``: anonymous); objects are named per owner.
 """
 
 from __future__ import annotations
@@ -37,15 +40,7 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Any
 
-from sqlalchemy import (
-    Connection,
-    Engine,
-    delete,
-    func,
-    select,
-    text,
-    update,
-)
+from sqlalchemy import Connection, Engine, delete, func, select, text, update
 from sqlalchemy import exc as sa_exc
 from sqlalchemy.dialects import postgresql, sqlite
 
@@ -206,44 +201,52 @@ class Store:
         return removed
 
     # -- objects --------------------------------------------------------------------------------
-    def put_object(self, name: str, body: dict[str, Any]) -> bool:
-        """Register an object; True when new, False when the same object was there.
+    def put_object(self, name: str, body: dict[str, Any], owner: str = "") -> bool:
+        """Register an object of `owner`; True when new, False when the same object was there.
 
         Raises :class:`ObjectConflictError` when the name holds another object."""
         body_text = _dumps(body)
+        mine = (objects.c.owner == owner) & (objects.c.name == name)
         with self._write() as conn:
             added = conn.execute(
                 self._insert(objects)
-                .values(name=name, body=body_text, created_at=time.time())
-                .on_conflict_do_nothing(index_elements=["name"])
+                .values(owner=owner, name=name, body=body_text, created_at=time.time())
+                .on_conflict_do_nothing(index_elements=["owner", "name"])
                 .returning(objects.c.name)  # a row back when inserted (rowcount is not kept)
             ).first()
             if added is not None:
                 return True
-            there = conn.execute(select(objects.c.body).where(objects.c.name == name)).scalar()
+            there = conn.execute(select(objects.c.body).where(mine)).scalar()
         if there != body_text:
             raise ObjectConflictError(name)
         return False
 
-    def delete_object(self, name: str) -> bool:
-        """Unregister an object; False when there was none of that name."""
+    def delete_object(self, name: str, owner: str = "") -> bool:
+        """Unregister an object of `owner`; False when it has none of that name."""
         with self._write() as conn:
-            return conn.execute(delete(objects).where(objects.c.name == name)).rowcount == 1
+            mine = (objects.c.owner == owner) & (objects.c.name == name)
+            return conn.execute(delete(objects).where(mine)).rowcount == 1
 
-    def get_objects(self, names: Sequence[str]) -> dict[str, dict[str, Any]]:
-        """The registered objects among `names` (missing names are left out)."""
+    def get_objects(self, names: Sequence[str], owner: str = "") -> dict[str, dict[str, Any]]:
+        """`owner`'s registered objects among `names` (missing names are left out)."""
         if not names:
             return {}
         with self._read() as conn:
             rows = conn.execute(
-                select(objects.c.name, objects.c.body).where(objects.c.name.in_(set(names)))
+                select(objects.c.name, objects.c.body).where(
+                    objects.c.owner == owner, objects.c.name.in_(set(names))
+                )
             ).all()
         return {name: json.loads(body) for name, body in rows}
 
-    def list_objects(self, limit: int) -> list[dict[str, Any]]:
+    def list_objects(self, limit: int, owner: str = "") -> list[dict[str, Any]]:
+        """`owner`'s registered objects by name, at most `limit`."""
         with self._read() as conn:
             rows = conn.execute(
-                select(objects.c.body).order_by(objects.c.name).limit(limit)
+                select(objects.c.body)
+                .where(objects.c.owner == owner)
+                .order_by(objects.c.name)
+                .limit(limit)
             ).scalars()
             return [json.loads(r) for r in rows]
 
@@ -251,9 +254,9 @@ class Store:
     def get_session(self, session_id: str) -> SessionRecord | None:
         with self._read() as conn:
             row = conn.execute(
-                select(sessions.c.version, sessions.c.config, sessions.c.created_at).where(
-                    sessions.c.id == session_id
-                )
+                select(
+                    sessions.c.version, sessions.c.config, sessions.c.created_at, sessions.c.owner
+                ).where(sessions.c.id == session_id)
             ).first()
             if row is None:
                 return None
@@ -263,7 +266,14 @@ class Store:
                 .order_by(observations.c.seq)
             ).scalars()
             stored = tuple(json.loads(o) for o in obs)
-        return SessionRecord(session_id, row[0], json.loads(row[1]), stored, row[2])
+        return SessionRecord(session_id, row[0], json.loads(row[1]), stored, row[2], row[3])
+
+    def session_owner(self, session_id: str) -> str | None:
+        """Who owns the session (``''``: anonymous); None when there is no such session."""
+        with self._read() as conn:
+            return conn.execute(
+                select(sessions.c.owner).where(sessions.c.id == session_id)
+            ).scalar()
 
     def get_snapshot(
         self, session_id: str, code_version: str, at_most: int
@@ -383,6 +393,7 @@ class Store:
                     id=record.id,
                     version=record.version,
                     config=_dumps(record.config),
+                    owner=record.owner,
                     created_at=now,
                     updated_at=now,
                 )

@@ -15,6 +15,7 @@ from sqlalchemy import (
     Integer,
     LargeBinary,
     MetaData,
+    PrimaryKeyConstraint,
     String,
     Table,
     Text,
@@ -24,12 +25,15 @@ __all__ = ["idempotency", "metadata", "objects", "observations", "sessions", "sn
 
 metadata = MetaData()
 
+#: Objects are named per owner (the client whose key registered them; ``''``: anonymous).
 objects = Table(
     "objects",
     metadata,
-    Column("name", Text, primary_key=True),
+    Column("owner", Text, nullable=False, server_default=""),
+    Column("name", Text, nullable=False),
     Column("body", Text, nullable=False),
     Column("created_at", Float, nullable=False),
+    PrimaryKeyConstraint("owner", "name", name="objects_owner_name_pkey"),
 )
 
 sessions = Table(
@@ -40,6 +44,7 @@ sessions = Table(
     Column("config", Text, nullable=False),
     Column("created_at", Float, nullable=False),
     Column("updated_at", Float, nullable=False),
+    Column("owner", Text, nullable=False, server_default=""),
     Index("sessions_updated_at", "updated_at"),
 )
 

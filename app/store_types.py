@@ -75,13 +75,15 @@ class Snapshot:
 
 @dataclass(frozen=True)
 class SessionRecord:
-    """What a session is made of: configuration and ordered observations (JSON dicts)."""
+    """What a session is made of: configuration and ordered observations (JSON dicts),
+    and the client whose key created it (``''``: anonymous)."""
 
     id: str
     version: int
     config: dict[str, Any]
     observations: tuple[dict[str, Any], ...]
     created_at: float
+    owner: str = ""
 
 
 def is_url(value: str | Path) -> bool:
