@@ -21,7 +21,7 @@ import numpy as np
 import pydantic_core
 
 from app.errors import LimitExceededError
-from app.store_types import SessionRecord, Snapshot
+from app.store_types import IdempotentWrite, SessionRecord, Snapshot, StoredResponse
 from planner.codec import (
     accuracy_from_dict,
     observation_from_dict,
@@ -42,9 +42,11 @@ __all__ = [
     "build_session",
     "catch_up",
     "derive",
+    "draw",
     "etag",
     "extends",
     "fingerprint",
+    "idempotent_write",
     "if_match_ok",
     "next_state",
     "observed",
@@ -197,3 +199,31 @@ def resume(base: Session | None, stored: bytes | None, record: SessionRecord) ->
     if restored is not None and extends(restored, record):
         base = restored
     return derive(catch_up(base, record))
+
+
+def draw(
+    session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
+) -> bytes:
+    """The session's picture (SVG or PNG bytes) with its plan, titled by id and version."""
+    from planner.render import session_picture
+
+    cfg = record.config
+    return session_picture(
+        session,
+        cfg["sensor_position"],
+        result,
+        fmt=kind,
+        view=view,
+        grid_size=cfg["strategy"]["grid_size"],
+        title=f"session {record.id[:8]} v{record.version}: {session.status}",
+        dpi=dpi,
+    )
+
+
+def idempotent_write(scope: str, key: str | None, fp: str, answer: Any) -> IdempotentWrite | None:
+    """What the store keeps of `answer` under an Idempotency-Key (None without a key)."""
+    if key is None:
+        return None
+    return IdempotentWrite(
+        scope, key, StoredResponse(fp, answer.status, answer.body, answer.headers)
+    )

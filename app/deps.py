@@ -6,7 +6,6 @@ and its lifespan); nothing here is a module-level global.
 
 from __future__ import annotations
 
-import secrets
 import time
 import uuid
 from typing import Annotated, Any
@@ -14,12 +13,15 @@ from typing import Annotated, Any
 from fastapi import Depends, Header, Path, Request
 from fastapi.security import HTTPAuthorizationCredentials, HTTPBearer
 
-from app.errors import InvalidInputError, UnauthorizedError
+from app.access import ANONYMOUS, Clients
+from app.errors import InvalidInputError, NotFoundError, UnauthorizedError
 from app.service import SessionService
 from app.settings import Settings
 from app.view_tokens import VIEWER_READS, check_token
 
 __all__ = [
+    "ClientDep",
+    "ClientsDep",
     "IdempotencyKey",
     "IfMatch",
     "ServiceDep",
@@ -48,42 +50,80 @@ ServiceDep = Annotated[SessionService, Depends(get_service)]
 _bearer = HTTPBearer(auto_error=False, description="the API key, when the service has one")
 
 
-def _viewer_token_opens(request: Request, key: str, given: str) -> bool:
+def get_clients(request: Request) -> Clients:
+    return request.app.state.clients
+
+
+ClientsDep = Annotated[Clients, Depends(get_clients)]
+
+
+def get_client(request: Request) -> str:
+    """The client the request's key names (``''`` on an open service)."""
+    return getattr(request.state, "client", ANONYMOUS)
+
+
+#: The client a request speaks for (set by the access dependency of its router).
+ClientDep = Annotated[str, Depends(get_client)]
+
+
+async def _viewer_token_opens(
+    request: Request, clients: Clients, service: SessionService, given: str
+) -> bool:
     """A viewer token (:mod:`app.view_tokens`), in the header or, for the page
-    itself, in its ``token`` query parameter, opens the viewer's reads of its session."""
+    itself, in its ``token`` query parameter, opens the viewer's reads of its session;
+    it is signed with the key of the session's owner."""
     route = request.scope.get("route")
     if request.method != "GET" or getattr(route, "name", None) not in VIEWER_READS:
         return False
     token = given or request.query_params.get("token", "")
     session_id = str(request.path_params.get("session_id", ""))
-    return bool(token) and check_token(key, token, session_id, time.time())
+    if not token or not session_id:
+        return False
+    owner = await service.owner_of(session_id)
+    key = None if owner is None else clients.key_of(owner)
+    return key is not None and check_token(key, token, session_id, time.time())
+
+
+async def _own_session(request: Request, service: SessionService, client: str) -> None:
+    """404 for a session of another client, worded as for one that does not exist."""
+    session_id = request.path_params.get("session_id")
+    if session_id is not None and await service.owner_of(str(session_id)) not in (None, client):
+        raise NotFoundError(f"no session {session_id}", field="id")
 
 
 async def require_api_key(
     request: Request,
-    settings: SettingsDep,
+    clients: ClientsDep,
+    service: ServiceDep,
     credentials: Annotated[HTTPAuthorizationCredentials | None, Depends(_bearer)],
 ) -> None:
-    """With ``TACTILE_API_KEY`` set, every /v1 request needs ``Authorization: Bearer <key>``
-    (or, for the viewer's reads of one session, a viewer token)."""
-    if settings.api_key is None:
-        return
-    key = settings.api_key.get_secret_value()
+    """With API keys, every /v1 request needs ``Authorization: Bearer <key>`` (or, for
+    the viewer's reads of one session, a viewer token); it then speaks for the key's
+    client and reaches only what that client created."""
     given = credentials.credentials if credentials else ""
-    if not secrets.compare_digest(given.encode(), key.encode()) and not _viewer_token_opens(
-        request, key, given
-    ):
+    client = clients.client_of(given)
+    if client is None:
+        if await _viewer_token_opens(request, clients, service, given):
+            return
         raise UnauthorizedError(
             "missing or wrong API key (Authorization: Bearer <key>)",
             field="Authorization",
             headers={"WWW-Authenticate": 'Bearer realm="tactile"'},
         )
+    request.state.client = client
+    await _own_session(request, service, client)
+
+
+async def open_access(request: Request, service: ServiceDep) -> None:
+    """An open service: every request is the anonymous client, and reaches only what
+    it owns (sessions a keyed run of the same database created stay closed)."""
+    await _own_session(request, service, ANONYMOUS)
 
 
 def auth_dependencies(settings: Settings) -> list[Any]:
     """The routers' dependencies: the API key check (and its OpenAPI security scheme)
-    only when the service has a key."""
-    return [Depends(require_api_key)] if settings.api_key is not None else []
+    when the service has keys; the owner check in either case."""
+    return [Depends(require_api_key if settings.keyed else open_access)]
 
 
 SessionId = Annotated[uuid.UUID, Path(description="session id (a random UUID)")]

@@ -20,6 +20,7 @@ from fastapi import Depends, FastAPI
 from fastapi.routing import APIRoute
 
 from app import migrations
+from app.access import load_clients
 from app.deps import reject_unknown_query
 from app.errors import PROBLEM_MEDIA_TYPE, install_error_handlers
 from app.observability import (
@@ -144,6 +145,7 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         dependencies=[Depends(reject_unknown_query)],
     )
     app.state.settings = settings
+    clients = app.state.clients = load_clients(settings)
     app.state.service = None
     install_error_handlers(app)
     inputs = app.state.inputs = input_models(settings)
@@ -151,9 +153,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
         app.include_router(module.build_router(inputs, settings))
     install_metrics(app)
     app.add_middleware(BodyLimitMiddleware, max_body_bytes=settings.max_body_bytes)
-    if settings.api_key is not None and not settings.public_docs:
-        key = settings.api_key.get_secret_value()
-        app.add_middleware(DocumentsKeyMiddleware, key=key)
+    if clients.keyed and not settings.public_docs:
+        app.add_middleware(DocumentsKeyMiddleware, clients=clients)
     if settings.allowed_hosts is not None:
         app.add_middleware(HostAllowListMiddleware, allowed=settings.allowed_hosts)
     app.add_middleware(SecurityHeadersMiddleware)

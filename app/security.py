@@ -8,8 +8,8 @@
   (:data:`app.viewer.VIEW_CSP`: its inline script and style by hash, fetches
   to its own origin). The interactive documentation pages, which load their
   scripts from elsewhere, keep the browser's default.
-- With an API key, the schema, the documentation pages and the metrics need it
-  too (``public_docs`` opens them): they tell a stranger every operation and how
+- With API keys, the schema, the documentation pages and the metrics need one
+  of them too (``public_docs`` opens them): they tell a stranger every operation and how
   busy the service is.
 - With ``allowed_hosts`` set, a request whose ``Host`` is not in it is refused
   with 400 problem+json naming the setting. A page on another site that makes
@@ -21,13 +21,13 @@
 from __future__ import annotations
 
 import ipaddress
-import secrets
 from collections.abc import Iterable
 
 from starlette.requests import Request
 from starlette.responses import JSONResponse
 from starlette.types import ASGIApp, Message, Receive, Scope, Send
 
+from app.access import Clients
 from app.errors import problem_response
 
 __all__ = [
@@ -156,14 +156,15 @@ KEYED_PATHS = ("/docs", "/redoc", "/openapi.json", "/metrics")
 class DocumentsKeyMiddleware(_Gate):
     """401 problem for the schema, documentation and metrics without the API key."""
 
-    def __init__(self, app: ASGIApp, key: str) -> None:
+    def __init__(self, app: ASGIApp, clients: Clients) -> None:
         super().__init__(app)
-        self.expected = f"Bearer {key}".encode()
+        self.clients = clients
 
     def admits(self, scope: Scope) -> bool:
-        return not scope["path"].startswith(KEYED_PATHS) or secrets.compare_digest(
-            _header(scope, b"authorization"), self.expected
-        )
+        if not scope["path"].startswith(KEYED_PATHS):
+            return True
+        scheme, _, given = _header(scope, b"authorization").decode("latin-1").partition(" ")
+        return scheme.lower() == "bearer" and self.clients.client_of(given.strip()) is not None
 
     def refusal(self, scope: Scope) -> JSONResponse:
         return problem_response(

@@ -91,6 +91,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     import uvicorn
     from uvicorn.supervisors import Multiprocess
 
+    from app.access import load_clients
     from app.observability import configure_logging
     from app.security import LOOPBACK_NAMES, is_loopback
     from app.settings import Settings
@@ -101,10 +102,15 @@ def cmd_serve(args: argparse.Namespace) -> int:
         db = args.db if is_url(args.db) else str(Path(args.db).expanduser().resolve())
         os.environ["TACTILE_DB"] = db
     settings = Settings()
-    if not is_loopback(args.host) and settings.api_key is None and not settings.open_access:
+    try:
+        keyed = load_clients(settings).keyed  # a broken keys file stops the start
+    except ValueError as exc:
+        raise SystemExit(f"tactile serve: {exc}") from exc
+    if not is_loopback(args.host) and not keyed and not settings.open_access:
         raise SystemExit(
             f"tactile serve: binding {args.host} (reachable from other hosts) needs an API "
-            "key: set TACTILE_API_KEY, or TACTILE_OPEN_ACCESS=true to serve without one"
+            "key: set TACTILE_API_KEYS (per client), TACTILE_API_KEYS_FILE or TACTILE_API_KEY, "
+            "or TACTILE_OPEN_ACCESS=true to serve without one"
         )
     if settings.allowed_hosts is None and is_loopback(args.host):
         # a loopback service answers loopback names only: no page elsewhere reaches it

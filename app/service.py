@@ -33,8 +33,10 @@ from app.cache import LRU, KeyedLocks
 from app.convert import (
     build_session,
     derive,
+    draw,
     etag,
     extends,
+    idempotent_write,
     if_match_ok,
     next_state,
     observed,
@@ -109,6 +111,8 @@ class SessionService:
         # for the first instead of computing it again
         self._planning: dict[tuple[Any, ...], anyio.Event] = {}
         self.pictures: LRU[tuple[Any, ...], bytes] = LRU(16)
+        # who owns each session: never changes, so kept without expiry (bounded)
+        self.owners: LRU[str, str] = LRU(max(1024, settings.session_cache_size))
         self._in_flight: set[tuple[str, str]] = set()
 
     # -- running work off the event loop ----------------------------------------------------
@@ -165,6 +169,15 @@ class SessionService:
             raise NotFoundError(f"no session {session_id}", field="id")
         return record
 
+    async def owner_of(self, session_id: str) -> str | None:
+        """The client owning the session; None when there is no such session."""
+        owner = self.owners.get(session_id)
+        if owner is None:
+            owner = await self.run_db(self.store.session_owner, session_id)
+            if owner is not None:
+                self.owners.put(session_id, owner)
+        return owner
+
     async def _session(self, record: SessionRecord) -> Session:
         """The derived session of a record (cached per version; caller holds the lock).
 
@@ -197,62 +210,64 @@ class SessionService:
         self.pictures.drop(lambda k: k[0] == session_id)
 
     # -- objects ----------------------------------------------------------------------------
-    async def register_object(self, data: dict[str, Any]) -> tuple[bool, str]:
+    async def register_object(self, data: dict[str, Any], owner: str) -> tuple[bool, str]:
         try:
             model = await self.run_cpu(object_from_dict, data)
         except PlannerError as exc:  # name fields from the body's root, like validation does
             field = (exc.field or "").removeprefix("object").removeprefix(".") or None
             raise type(exc)(exc.message, field=field) from exc
-        created = await self.run_db(self.store.put_object, model.name, object_to_dict(model))
+        created = await self.run_db(self.store.put_object, model.name, object_to_dict(model), owner)
         return created, model.name
 
     async def import_mesh(
-        self, data: bytes, file_type: str, heights: tuple, name: str, max_poses: int | None
+        self,
+        data: bytes,
+        file_type: str,
+        heights: tuple,
+        name: str,
+        max_poses: int | None,
+        owner: str,
     ) -> tuple[bool, str]:
         """Register the object model of an uploaded triangle mesh (:func:`mesh_object`)."""
         stored = await self.run_cpu(
             mesh_object, data, file_type, heights, name, max_poses, self.settings, self.inputs
         )
-        created = await self.run_db(self.store.put_object, stored["name"], stored)
+        created = await self.run_db(self.store.put_object, stored["name"], stored, owner)
         return created, stored["name"]
 
     # -- sessions ---------------------------------------------------------------------------
-    async def _stored_objects(self, refs: Sequence[str | dict[str, Any]]) -> dict[str, Any]:
+    async def _stored_objects(
+        self, refs: Sequence[str | dict[str, Any]], owner: str
+    ) -> dict[str, Any]:
         names = [r for r in refs if isinstance(r, str)]
-        return await self.run_db(self.store.get_objects, names) if names else {}
+        return await self.run_db(self.store.get_objects, names, owner) if names else {}
 
     async def create_session(
-        self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None
+        self, body: dict[str, Any], idem_key: str | None, fp: str, limit: int | None, owner: str
     ) -> Answer:
-        scope = "sessions"
+        # a key another client used replays nothing of theirs
+        scope = f"sessions:{owner}" if owner else "sessions"
         with self._claim(scope, idem_key):
             if idem_key and (old := await self.run_db(self.store.get_idempotent, scope, idem_key)):
                 return self._replay(old, fp)
-            stored = await self._stored_objects(body["objects"])
+            stored = await self._stored_objects(body["objects"], owner)
 
             def prepare() -> tuple[SessionRecord, Session, bytes]:
                 # one trip to the CPU workers: under load each trip waits behind plans
                 cfg = session_config(body, resolve_models(body["objects"], stored))
-                record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0)
+                record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0, owner)
                 session = derive(build_session(record))
                 return record, session, session_json(record.id, 1, cfg, session, limit)
 
             record, session, answer_body = await self.run_cpu(prepare)
             headers = {"ETag": etag(1), "Location": f"/v1/sessions/{record.id}"}
             answer = Answer(201, answer_body, headers)
-            idem = self._idem(scope, idem_key, fp, answer)
+            idem = idempotent_write(scope, idem_key, fp, answer)
             if (old := await self.run_db(self.store.create_session, record, idem)) is not None:
                 return self._replay(old, fp)
             self.sessions.put((record.id, 1), session)
+            self.owners.put(record.id, owner)
             return answer
-
-    @staticmethod
-    def _idem(scope: str, key: str | None, fp: str, answer: Answer) -> IdempotentWrite | None:
-        if key is None:
-            return None
-        return IdempotentWrite(
-            scope, key, StoredResponse(fp, answer.status, answer.body, answer.headers)
-        )
 
     async def get_session(self, session_id: str, limit: int | None) -> Answer:
         async with self.locks.hold(session_id):
@@ -298,7 +313,7 @@ class SessionService:
                         next_state, record, current, step, limit, keep
                     )
                     answer = Answer(status, body, {"ETag": etag(version)})
-                    idem = self._idem(scope, idem_key, fp, answer)
+                    idem = idempotent_write(scope, idem_key, fp, answer)
                     try:
                         old = await self.run_db(write, record, idem, snap)
                     except VersionConflictError as exc:
@@ -443,7 +458,7 @@ class SessionService:
                 session = await self._session(record)
         if image is None:
             result = await self._plan(record, session)
-            image = await self.run_cpu(self._draw, session, result, record, kind, view, dpi)
+            image = await self.run_cpu(draw, session, result, record, kind, view, dpi)
             self.pictures.put(key, image)
         media = "image/svg+xml" if kind == "svg" else "image/png"
         return Answer(200, image, {"ETag": etag(record.version), "Content-Type": media})
@@ -478,21 +493,3 @@ class SessionService:
             body = json.dumps(data).encode()
             self.pictures.put(key, body)
         return Answer(200, body, {"ETag": etag(record.version)})
-
-    @staticmethod
-    def _draw(
-        session: Session, result: Plan, record: SessionRecord, kind: str, view: str, dpi: int
-    ) -> bytes:
-        from planner.render import session_picture
-
-        cfg = record.config
-        return session_picture(
-            session,
-            cfg["sensor_position"],
-            result,
-            fmt=kind,
-            view=view,
-            grid_size=cfg["strategy"]["grid_size"],
-            title=f"session {record.id[:8]} v{record.version}: {session.status}",
-            dpi=dpi,
-        )

@@ -97,7 +97,17 @@ class Settings(BaseSettings):
     default_budget_work: float = Field(DEFAULT_WORK, gt=0, description="a plan's work budget")
 
     # access and logs
-    api_key: SecretStr | None = Field(None, description="bearer token; None: open")
+    api_key: SecretStr | None = Field(
+        None, description="one bearer token for all clients (the unnamed client)"
+    )
+    api_keys: dict[str, SecretStr] | None = Field(
+        None,
+        description="per-client bearer tokens, client name -> key (env TACTILE_API_KEYS, "
+        "JSON); each client sees only the sessions and objects it created",
+    )
+    api_keys_file: Path | None = Field(
+        None, description="a JSON file {client: key} of more per-client keys"
+    )
     view_link_ttl_s: float = Field(
         3600.0, gt=0, le=30 * 24 * 3600, description="how long a viewer link works"
     )
@@ -137,6 +147,11 @@ class Settings(BaseSettings):
 
             database_url(value)  # a URL of a supported backend, or a file path
         return value
+
+    @property
+    def keyed(self) -> bool:
+        """Whether requests need a key (any of api_key, api_keys, api_keys_file is set)."""
+        return bool(self.api_key or self.api_keys or self.api_keys_file)
 
     @property
     def database(self) -> str:

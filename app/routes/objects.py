@@ -8,7 +8,7 @@ from fastapi import APIRouter, Path, Query, Request, Response
 from pydantic import Field
 
 from app.answers import ObjectCreated, ObjectList, ObjectOut
-from app.deps import ServiceDep, auth_dependencies
+from app.deps import ClientDep, ServiceDep, auth_dependencies
 from app.errors import (
     ConflictError,
     InvalidInputError,
@@ -51,6 +51,18 @@ async def _registered(response: Response, registration: Awaitable[tuple[bool, st
     return ObjectCreated(name=name)
 
 
+_MESH_RESPONSES = {
+    200: {"model": ObjectCreated, "description": "the same object was there"},
+    415: {"model": Problem, "description": "not a binary or model/* Content-Type"},
+}
+_MESH_BODY = {
+    "requestBody": {
+        "required": True,
+        "content": {"application/octet-stream": {"schema": {"type": "string", "format": "binary"}}},
+    }
+}
+
+
 def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
     router = APIRouter(
         prefix="/v1/objects",
@@ -67,34 +79,42 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         response_model=ObjectCreated,
         responses={200: {"model": ObjectCreated, "description": "the same object was there"}},
     )
-    async def create_object(body: ObjectIn, service: ServiceDep, response: Response):  # type: ignore[valid-type]
-        """Register one object (§8 format). The same name with other geometry: 409."""
-        return await _registered(response, service.register_object(body.as_dict()))  # type: ignore[attr-defined]
+    async def create_object(
+        body: ObjectIn,  # type: ignore[valid-type]
+        service: ServiceDep,
+        client: ClientDep,
+        response: Response,
+    ):
+        """Register one object (§8 format). The same name with other geometry: 409.
+        Objects are named per client: another key's objects are not seen."""
+        registration = service.register_object(body.as_dict(), client)  # type: ignore[attr-defined]
+        return await _registered(response, registration)
 
     @router.get("", response_model=ObjectList, response_model_exclude_none=True)
     async def list_objects(
         service: ServiceDep,
+        client: ClientDep,
         limit: Annotated[int, Query(ge=1, le=settings.max_list_objects)] = (
             settings.max_list_objects
         ),
     ):
-        """Every registered object, by name, as one §8 object file."""
-        objects = await service.run_db(service.store.list_objects, limit)
+        """Every object this client registered, by name, as one §8 object file."""
+        objects = await service.run_db(service.store.list_objects, limit, client)
         return ObjectList(objects=[ObjectOut(**o) for o in objects])
 
     @router.get("/{name}", response_model=ObjectOut, response_model_exclude_none=True)
-    async def get_object(name: ObjectName, service: ServiceDep):
+    async def get_object(name: ObjectName, service: ServiceDep, client: ClientDep):
         """One registered object in the §8 format."""
-        found = await service.run_db(service.store.get_objects, [name])
+        found = await service.run_db(service.store.get_objects, [name], client)
         if name not in found:
             raise NotFoundError(f"no object named {name!r}", field="name")
         return ObjectOut(**found[name])
 
     @router.delete("/{name}", status_code=204, response_class=Response)
-    async def delete_object(name: ObjectName, service: ServiceDep):
+    async def delete_object(name: ObjectName, service: ServiceDep, client: ClientDep):
         """Unregister an object. Sessions that use it keep their own copy (they store
         the geometry they were created with) and go on unchanged."""
-        if not await service.run_db(service.store.delete_object, name):
+        if not await service.run_db(service.store.delete_object, name, client):
             raise NotFoundError(f"no object named {name!r}", field="name")
         return Response(status_code=204)
 
@@ -102,22 +122,13 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         ":import-mesh",
         status_code=201,
         response_model=ObjectCreated,
-        responses={
-            200: {"model": ObjectCreated, "description": "the same object was there"},
-            415: {"model": Problem, "description": "not a binary or model/* Content-Type"},
-        },
-        openapi_extra={
-            "requestBody": {
-                "required": True,
-                "content": {
-                    "application/octet-stream": {"schema": {"type": "string", "format": "binary"}}
-                },
-            }
-        },
+        responses=_MESH_RESPONSES,
+        openapi_extra=_MESH_BODY,
     )
     async def import_mesh(
         request: Request,
         service: ServiceDep,
+        client: ClientDep,
         response: Response,
         height: Annotated[float, Query(gt=0, le=1e6, description="slice height above the table")],
         name: Annotated[str, Query(min_length=1, max_length=200, pattern=NAME_PATTERN)],
@@ -145,7 +156,9 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
             raise InvalidInputError("the request body must hold the mesh file", field="body")
         return await _registered(
             response,
-            service.import_mesh(data, file_type, (height, *(heights or ())), name, max_poses),
+            service.import_mesh(
+                data, file_type, (height, *(heights or ())), name, max_poses, client
+            ),
         )
 
     return router

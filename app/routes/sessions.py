@@ -4,7 +4,7 @@ from typing import Annotated
 
 from fastapi import APIRouter, Query, Request, Response
 
-from app.deps import IdempotencyKey, IfMatch, ServiceDep, SessionId, auth_dependencies
+from app.deps import ClientDep, IdempotencyKey, IfMatch, ServiceDep, SessionId, auth_dependencies
 from app.routes import (
     PRECONDITION_REQUIRED,
     PROBLEMS,
@@ -41,17 +41,19 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         body: SessionCreate,  # type: ignore[valid-type]
         request: Request,
         service: ServiceDep,
+        client: ClientDep,
         idempotency_key: IdempotencyKey = None,
         limit: HypothesisLimit = None,
     ):
-        """Start a recognition over an object set (registered names or inline §8 objects)."""
+        """Start a recognition over an object set (registered names or inline §8 objects).
+        The session belongs to the client whose key created it: other keys get 404."""
         data = body.model_dump(mode="json")  # type: ignore[attr-defined]
         data["objects"] = [
             o if isinstance(o, str) else o.as_dict()
             for o in body.objects  # type: ignore[attr-defined]
         ]
         fp = request_fingerprint(request, body)
-        return respond(await service.create_session(data, idempotency_key, fp, limit))
+        return respond(await service.create_session(data, idempotency_key, fp, limit, client))
 
     @router.get("/{session_id}", response_model=SessionOut)
     async def get_session(

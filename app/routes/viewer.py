@@ -8,7 +8,7 @@ from fastapi import APIRouter, Query
 from fastapi.responses import HTMLResponse
 
 from app.answers import ViewLinkOut
-from app.deps import ServiceDep, SessionId, SettingsDep, auth_dependencies
+from app.deps import ClientDep, ClientsDep, ServiceDep, SessionId, auth_dependencies
 from app.errors import ConflictError
 from app.routes import PROBLEMS, respond
 from app.schemas import InputModels
@@ -49,15 +49,18 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         return HTMLResponse(VIEW_HTML, headers={"Content-Security-Policy": VIEW_CSP})
 
     @router.post("/view-link", response_model=ViewLinkOut)
-    async def create_view_link(session_id: SessionId, service: ServiceDep, config: SettingsDep):
+    async def create_view_link(
+        session_id: SessionId, service: ServiceDep, clients: ClientsDep, client: ClientDep
+    ):
         """A link to this session's viewer for a browser, which cannot send the API key:
         its token opens the page and the page's reads of this session only, for
         `view_link_ttl_s`. Without an API key the page needs no link: 409."""
-        if config.api_key is None:
+        key = clients.key_of(client)
+        if key is None:
             raise ConflictError("the service has no API key: open .../view directly", field="id")
         await service.record(str(session_id))  # 404 for an unknown session
-        expires = int(time.time() + config.view_link_ttl_s)
-        token = make_token(config.api_key.get_secret_value(), str(session_id), expires)
+        expires = int(time.time() + service.settings.view_link_ttl_s)
+        token = make_token(key, str(session_id), expires)
         url = f"/v1/sessions/{session_id}/view?token={quote(token, safe='')}"
         return ViewLinkOut(url=url, token=token, expires_at=float(expires))
 

@@ -136,6 +136,7 @@ def sync_detailed(
     """ Create Object
 
      Register one object (§8 format). The same name with other geometry: 409.
+    Objects are named per client: another key's objects are not seen.
 
     Args:
         body (ObjectIn): One object in the §8 format: `outline` (one stable pose) or
@@ -170,6 +171,7 @@ def sync(
     """ Create Object
 
      Register one object (§8 format). The same name with other geometry: 409.
+    Objects are named per client: another key's objects are not seen.
 
     Args:
         body (ObjectIn): One object in the §8 format: `outline` (one stable pose) or
@@ -199,6 +201,7 @@ async def asyncio_detailed(
     """ Create Object
 
      Register one object (§8 format). The same name with other geometry: 409.
+    Objects are named per client: another key's objects are not seen.
 
     Args:
         body (ObjectIn): One object in the §8 format: `outline` (one stable pose) or
@@ -233,6 +236,7 @@ async def asyncio(
     """ Create Object
 
      Register one object (§8 format). The same name with other geometry: 409.
+    Objects are named per client: another key's objects are not seen.
 
     Args:
         body (ObjectIn): One object in the §8 format: `outline` (one stable pose) or

@@ -130,7 +130,7 @@ def sync_detailed(
 ) -> Response[ObjectList | Problem]:
     """ List Objects
 
-     Every registered object, by name, as one §8 object file.
+     Every object this client registered, by name, as one §8 object file.
 
     Args:
         limit (int | Unset):  Default: 1000.
@@ -163,7 +163,7 @@ def sync(
 ) -> ObjectList | Problem | None:
     """ List Objects
 
-     Every registered object, by name, as one §8 object file.
+     Every object this client registered, by name, as one §8 object file.
 
     Args:
         limit (int | Unset):  Default: 1000.
@@ -191,7 +191,7 @@ async def asyncio_detailed(
 ) -> Response[ObjectList | Problem]:
     """ List Objects
 
-     Every registered object, by name, as one §8 object file.
+     Every object this client registered, by name, as one §8 object file.
 
     Args:
         limit (int | Unset):  Default: 1000.
@@ -224,7 +224,7 @@ async def asyncio(
 ) -> ObjectList | Problem | None:
     """ List Objects
 
-     Every registered object, by name, as one §8 object file.
+     Every object this client registered, by name, as one §8 object file.
 
     Args:
         limit (int | Unset):  Default: 1000.

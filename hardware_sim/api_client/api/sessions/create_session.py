@@ -149,6 +149,7 @@ def sync_detailed(
     """ Create Session
 
      Start a recognition over an object set (registered names or inline §8 objects).
+    The session belongs to the client whose key created it: other keys get 404.
 
     Args:
         limit (int | None | Unset): at most this many hypotheses
@@ -191,6 +192,7 @@ def sync(
     """ Create Session
 
      Start a recognition over an object set (registered names or inline §8 objects).
+    The session belongs to the client whose key created it: other keys get 404.
 
     Args:
         limit (int | None | Unset): at most this many hypotheses
@@ -228,6 +230,7 @@ async def asyncio_detailed(
     """ Create Session
 
      Start a recognition over an object set (registered names or inline §8 objects).
+    The session belongs to the client whose key created it: other keys get 404.
 
     Args:
         limit (int | None | Unset): at most this many hypotheses
@@ -270,6 +273,7 @@ async def asyncio(
     """ Create Session
 
      Start a recognition over an object set (registered names or inline §8 objects).
+    The session belongs to the client whose key created it: other keys get 404.
 
     Args:
         limit (int | None | Unset): at most this many hypotheses
