@@ -179,7 +179,12 @@ def test_serving_other_hosts_needs_a_key_unless_open_access_is_set(tmp_path):
     refused = _serve_any_address(tmp_path, {})
     _, err = refused.communicate(timeout=60)
     assert refused.returncode != 0 and b"TACTILE_API_KEY" in err
-    for env in ({"TACTILE_API_KEY": "s3cret"}, {"TACTILE_OPEN_ACCESS": "true"}):
+    (tmp_path / "keys.json").write_text('{"cell-1": "k1", "rig": "k1"}')
+    broken = _serve_any_address(tmp_path, {"TACTILE_API_KEYS_FILE": str(tmp_path / "keys.json")})
+    _, err = broken.communicate(timeout=60)
+    assert broken.returncode != 0 and b"share a key" in err
+    keyed = ({"TACTILE_API_KEY": "s3cret"}, {"TACTILE_API_KEYS": '{"cell-1": "k1"}'})
+    for env in (*keyed, {"TACTILE_OPEN_ACCESS": "true"}):
         server = _serve_any_address(tmp_path, env)
         try:
             started = False
