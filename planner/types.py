@@ -55,9 +55,13 @@ def _finite_vec(value: Sequence[float], name: str) -> Vec2:
 
 def _unit_vec(value: Sequence[float], name: str) -> Vec2:
     x, y = _finite_vec(value, name)
-    norm = math.hypot(x, y)
-    if norm < 1e-12:
+    if x == 0 and y == 0:
         raise InvalidObservationError("must not be the zero vector", field=name)
+    norm = math.hypot(x, y)
+    if norm < 1e-150:  # tiny or subnormal: bring it to about 1 first so it keeps its way
+        scale = max(abs(x), abs(y))
+        x, y = x / scale, y / scale
+        norm = math.hypot(x, y)
     return (x / norm, y / norm)
 
 
