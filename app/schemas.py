@@ -28,6 +28,7 @@ from pydantic import (
     model_validator,
 )
 
+from app.schema_rules import NOT_ZERO, ONE_POSE_FORM, ONE_SHAPE, only_one_shape
 from app.settings import Settings
 from planner.planning.config import STRATEGIES
 
@@ -205,15 +206,6 @@ class InputModels:
     ObservationIn: type[BaseModel]
 
 
-def _only_one_shape(data: Any) -> Any:
-    if isinstance(data, dict):
-        if ("outline" in data) == ("stable_poses" in data):
-            raise ValueError("give exactly one of 'outline' or 'stable_poses'")
-        if "stable_poses" in data and ("holes" in data or "normal_z" in data):
-            raise ValueError("with 'stable_poses', 'holes' and 'normal_z' go in each pose")
-    return data
-
-
 def _object_or_name(value: Any) -> str:
     return "object-name" if isinstance(value, str) else "inline-object"
 
@@ -223,6 +215,7 @@ class _Shapes:
     """The constrained field types of one app's request models."""
 
     Vec2: Any
+    Direction: Any
     Ring: Any
     Holes: Any
     NormalZ: Any
@@ -241,6 +234,15 @@ def _shapes(settings: Settings) -> _Shapes:
     ]
     return _Shapes(
         Vec2=Vec2,
+        Direction=Annotated[
+            list[Coord],
+            Field(
+                min_length=2,
+                max_length=2,
+                description="[x, y], not both zero; normalized by the service",
+                json_schema_extra=NOT_ZERO,
+            ),
+        ],
         Ring=Ring,
         Holes=Annotated[list[Ring], Field(max_length=settings.max_holes)],
         NormalZ=Annotated[
@@ -268,7 +270,9 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
         heights (DESIGN §4.13), the first at the default height; at most
         `max_pose_faces` faces in all."""
 
-        model_config = ConfigDict(extra="forbid", title="StablePoseIn")
+        model_config = ConfigDict(
+            extra="forbid", title="StablePoseIn", json_schema_extra=ONE_POSE_FORM
+        )
         outline: t.Ring | None = None
         holes: t.Holes = Field(default_factory=list)
         probability: Annotated[float, Field(gt=0, le=1)] = 1.0
@@ -294,7 +298,7 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
     class ObjectIn(BaseModel):
         """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
 
-        model_config = ConfigDict(extra="forbid", title="ObjectIn")
+        model_config = ConfigDict(extra="forbid", title="ObjectIn", json_schema_extra=ONE_SHAPE)
         name: t.Name
         outline: t.Ring | None = None
         holes: t.Holes | None = None
@@ -305,7 +309,7 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
         ) = None
         prior: Annotated[float, Field(gt=0, le=1e12, allow_inf_nan=False)] | None = None
 
-        _shape = model_validator(mode="before")(_only_one_shape)
+        _shape = model_validator(mode="before")(only_one_shape)
 
         def as_dict(self) -> dict[str, Any]:
             return self.model_dump(exclude_none=True)
@@ -448,7 +452,7 @@ def _observation_in(t: _Shapes) -> type[BaseModel]:
     class PathIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="PathIn")
         origin: t.Vec2
-        direction: t.Vec2 = Field(description="non-zero; normalized by the service")
+        direction: t.Direction
         length: t.Length
         height: t.Coord | None = Field(
             None,
@@ -459,7 +463,7 @@ def _observation_in(t: _Shapes) -> type[BaseModel]:
     class ContactIn(BaseModel):
         model_config = ConfigDict(extra="forbid", title="ContactIn")
         point: t.Vec2
-        normal: t.Vec2 = Field(description="measured outward normal; non-zero")
+        normal: t.Direction = Field(description="the measured outward normal, not both zero")
         normal_z: Annotated[float, Field(ge=-1, le=1)] | None = None
 
     class ObservationIn(BaseModel):

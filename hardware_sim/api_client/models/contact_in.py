@@ -24,7 +24,7 @@ T = TypeVar("T", bound="ContactIn")
 class ContactIn:
     """ 
         Attributes:
-            normal (list[float]): measured outward normal; non-zero
+            normal (list[float]): the measured outward normal, not both zero
             point (list[float]): [x, y]
             normal_z (float | None | Unset):
      """

@@ -24,7 +24,7 @@ T = TypeVar("T", bound="PathIn")
 class PathIn:
     """ 
         Attributes:
-            direction (list[float]): non-zero; normalized by the service
+            direction (list[float]): [x, y], not both zero; normalized by the service
             length (float):
             origin (list[float]): [x, y]
             height (float | None | Unset): probing height above the table, one the objects have slices at (the plan's path
