@@ -439,12 +439,14 @@ class SessionService:
             del self._planning[key]
             done.set()
 
-    async def get_plan(
-        self, session_id: str, limit: int, position: tuple[float, float] | None = None
-    ) -> Answer:
+    async def get_plan(self, session_id: str, limit: int, position: tuple | None = None) -> Answer:
+        """The plan from `position` (None, or a None coordinate: the session's)."""
         async with self.locks.hold(session_id):  # the state only; the plan is computed after
             record = await self.record(session_id)
             session = await self._session(record)
+        if position is not None:
+            home = record.config["sensor_position"]
+            position = tuple(home[i] if v is None else v for i, v in enumerate(position))
         result = await self._plan(record, session, position)
         body = plan_json(result, record.version, limit)
         return Answer(200, body, {"ETag": etag(record.version)})

@@ -6,7 +6,6 @@ from fastapi import APIRouter, Query
 
 from app.answers import PlanOut
 from app.deps import ServiceDep, SessionId, auth_dependencies
-from app.errors import InvalidInputError
 from app.routes import PROBLEMS, respond
 from app.schemas import InputModels
 from app.settings import Settings
@@ -28,8 +27,8 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
             ge=-big,
             le=big,
             allow_inf_nan=False,
-            description="the sensor's current place (world frame; give both x and y); "
-            "default: the session's sensor_position",
+            description="the sensor's current place (world frame); a coordinate not "
+            "given is the session's sensor_position's",
         ),
     ]
 
@@ -44,11 +43,9 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         """Ranked sensing paths, best first, within the session's `budget_ms`
         (`truncated` says the search stopped early). With no contact yet: the opening probe.
         `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
-        opening probe start there)."""
-        if (sensor_x is None) != (sensor_y is None):
-            missing = "sensor_y" if sensor_y is None else "sensor_x"
-            raise InvalidInputError("give both sensor_x and sensor_y, or neither", field=missing)
-        position = None if sensor_x is None else (sensor_x, sensor_y)
+        opening probe start there); one alone moves the session's sensor_position along
+        that axis."""
+        position = None if sensor_x is None and sensor_y is None else (sensor_x, sensor_y)
         return respond(await service.get_plan(str(session_id), limit, position))
 
     return router

@@ -392,9 +392,12 @@ def test_plan_from_the_sensor_position_given(client):
     assert probe["direction"] == pytest.approx([0.0, 1.0], abs=1e-9)
     default = client.get(url).json()["paths"][0]  # the session's place, not the last asked
     assert default["origin"] == pytest.approx([10.0, 0.0])
-    for params, field in [({"sensor_x": 1}, "sensor_y"), ({"sensor_y": 1}, "sensor_x")]:
-        r = client.get(url, params=params)
-        assert is_problem(r, 422) and r.json()["errors"][0]["field"] == field
+    # one coordinate alone moves the session's place along that axis; the probe
+    # starts on the safe circle (radius 10) toward the sensor
+    bearing = [10**0.5, -3 * 10**0.5]  # radius 10 toward (10, -30)
+    for params, origin in [({"sensor_x": -20}, [-10.0, 0.0]), ({"sensor_y": -30}, bearing)]:
+        got = client.get(url, params=params).json()["paths"][0]["origin"]
+        assert got == pytest.approx(origin, abs=1e-9)
     r = client.get(url, params={"sensor_x": "nan", "sensor_y": 0})
     assert is_problem(r, 422) and r.json()["errors"][0]["field"] == "sensor_x"
 

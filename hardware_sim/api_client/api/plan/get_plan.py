@@ -154,15 +154,16 @@ def sync_detailed(
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
     `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
-    opening probe start there).
+    opening probe start there); one alone moves the session's sensor_position along
+    that axis.
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
-        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
-        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
+        sensor_x (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
+        sensor_y (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -201,15 +202,16 @@ def sync(
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
     `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
-    opening probe start there).
+    opening probe start there); one alone moves the session's sensor_position along
+    that axis.
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
-        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
-        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
+        sensor_x (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
+        sensor_y (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -243,15 +245,16 @@ async def asyncio_detailed(
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
     `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
-    opening probe start there).
+    opening probe start there); one alone moves the session's sensor_position along
+    that axis.
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
-        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
-        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
+        sensor_x (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
+        sensor_y (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
@@ -290,15 +293,16 @@ async def asyncio(
      Ranked sensing paths, best first, within the session's `budget_ms`
     (`truncated` says the search stopped early). With no contact yet: the opening probe.
     `sensor_x`, `sensor_y`: plan from where the sensor is now (motion costs and the
-    opening probe start there).
+    opening probe start there); one alone moves the session's sensor_position along
+    that axis.
 
     Args:
         session_id (UUID): session id (a random UUID)
         limit (int | Unset):  Default: 5.
-        sensor_x (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
-        sensor_y (float | None | Unset): the sensor's current place (world frame; give both x and
-            y); default: the session's sensor_position
+        sensor_x (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
+        sensor_y (float | None | Unset): the sensor's current place (world frame); a coordinate
+            not given is the session's sensor_position's
 
     Raises:
         errors.UnexpectedStatus: If the server returns an undocumented status code and Client.raise_on_unexpected_status is True.
