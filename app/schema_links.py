@@ -41,10 +41,16 @@ def _session_links() -> dict[str, Any]:
 
 def _object_links() -> dict[str, Any]:
     name = {"name": "$response.body#/name"}
-    return {
+    links = {
         op: {"operationId": op, "parameters": name, "description": f"{op} of this object"}
         for op in ("get_object", "delete_object")
     }
+    links["create_session"] = {
+        "operationId": "create_session",
+        "requestBody": {"objects": ["$response.body#/name"]},
+        "description": "a session among this object alone (the other fields as wanted)",
+    }
+    return links
 
 
 def add_links(schema: dict[str, Any]) -> dict[str, Any]:

@@ -151,16 +151,23 @@ def test_the_schema_links_what_is_created_to_the_operations_on_it(client):
             for link in response.get("links", {}).values():
                 path, method, target = ops[link["operationId"]]
                 names = {p["name"] for p in target.get("parameters", [])}
-                for key in link["parameters"]:
+                params = link.get("parameters", {})
+                for key in params:
                     assert key.removeprefix("header.") in names, (op_id, link)
                 if op_id in answers and answers[op_id].status_code == int(status):
                     body = answers[op_id].json()
-                    value = body["id"] if "session_id" in link["parameters"] else body["name"]
+                    value = body["id"] if "session_id" in params else body["name"]
                     url = path.replace("{session_id}", value).replace("{name}", value)
                     if method == "get":
                         followed.add(link["operationId"])
                         assert client.get(url).status_code < 300, url
+                    elif "requestBody" in link:  # the created object, in a new session
+                        assert link["requestBody"] == {"objects": ["$response.body#/name"]}
+                        followed.add(link["operationId"])
+                        made = client.post(url, json={"objects": [value]})
+                        assert made.status_code == 201, made.text
     assert {"get_session", "get_report_json", "get_object", "get_view"} <= followed
+    assert "create_session" in followed
 
 
 def _serve_any_address(tmp_path, env):
