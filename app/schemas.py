@@ -197,6 +197,24 @@ class Health(BaseModel):
 
 
 # -- requests ---------------------------------------------------------------------------------
+# Requests a client can send as they are (the default sensor and safe circle): API
+# testers start from them, and the docs page shows them.
+_PLATE = {"name": "plate", "outline": [[0, 0], [60, 0], [60, 40], [0, 40]]}
+_OBJECT_EXAMPLES = {"examples": [_PLATE]}
+_SESSION_EXAMPLES = {
+    "examples": [{"objects": [_PLATE], "sensor": {"position_error": 1, "normal_error": 0.05}}]
+}
+_OBSERVATION_EXAMPLES = {
+    "examples": [
+        {
+            "path": {"origin": [200, 0], "direction": [-1, 0], "length": 400},
+            "contact": {"point": [20, 0], "normal": [1, 0]},
+        },
+        {"path": {"origin": [0, 200], "direction": [0, -1], "length": 400}, "contact": None},
+    ]
+}
+
+
 @dataclass(frozen=True)
 class InputModels:
     """The request models of one app (their limits come from its settings)."""
@@ -298,7 +316,9 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
     class ObjectIn(BaseModel):
         """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
 
-        model_config = ConfigDict(extra="forbid", title="ObjectIn", json_schema_extra=ONE_SHAPE)
+        model_config = ConfigDict(
+            extra="forbid", title="ObjectIn", json_schema_extra={**ONE_SHAPE, **_OBJECT_EXAMPLES}
+        )
         name: t.Name
         outline: t.Ring | None = None
         holes: t.Holes | None = None
@@ -424,7 +444,9 @@ def _session_create(
         """A new session: its object set (registered names or inline §8 objects), sensor
         bounds, safe circle, the sensor's place on it, strategy and allowed outliers."""
 
-        model_config = ConfigDict(extra="forbid", title="SessionCreate")
+        model_config = ConfigDict(
+            extra="forbid", title="SessionCreate", json_schema_extra=_SESSION_EXAMPLES
+        )
         objects: Annotated[
             list[ObjectRef], Field(min_length=1, max_length=settings.max_objects_per_session)
         ]
@@ -469,7 +491,9 @@ def _observation_in(t: _Shapes) -> type[BaseModel]:
     class ObservationIn(BaseModel):
         """One executed sensing path and what it touched (`contact` null: nothing)."""
 
-        model_config = ConfigDict(extra="forbid", title="ObservationIn")
+        model_config = ConfigDict(
+            extra="forbid", title="ObservationIn", json_schema_extra=_OBSERVATION_EXAMPLES
+        )
         path: PathIn
         contact: ContactIn | None = None
 
