@@ -28,6 +28,7 @@ from pydantic import (
     model_validator,
 )
 
+from app.schema_examples import OBJECT_EXAMPLES, OBSERVATION_EXAMPLES, SESSION_EXAMPLES
 from app.schema_rules import NOT_ZERO, ONE_POSE_FORM, ONE_SHAPE, only_one_shape
 from app.settings import Settings
 from planner.planning.config import STRATEGIES
@@ -197,24 +198,6 @@ class Health(BaseModel):
 
 
 # -- requests ---------------------------------------------------------------------------------
-# Requests a client can send as they are (the default sensor and safe circle): API
-# testers start from them, and the docs page shows them.
-_PLATE = {"name": "plate", "outline": [[0, 0], [60, 0], [60, 40], [0, 40]]}
-_OBJECT_EXAMPLES = {"examples": [_PLATE]}
-_SESSION_EXAMPLES = {
-    "examples": [{"objects": [_PLATE], "sensor": {"position_error": 1, "normal_error": 0.05}}]
-}
-_OBSERVATION_EXAMPLES = {
-    "examples": [
-        {
-            "path": {"origin": [200, 0], "direction": [-1, 0], "length": 400},
-            "contact": {"point": [20, 0], "normal": [1, 0]},
-        },
-        {"path": {"origin": [0, 200], "direction": [0, -1], "length": 400}, "contact": None},
-    ]
-}
-
-
 @dataclass(frozen=True)
 class InputModels:
     """The request models of one app (their limits come from its settings)."""
@@ -317,7 +300,7 @@ def _object_in(settings: Settings, t: _Shapes) -> type[BaseModel]:
         """One object in the §8 format: `outline` (one stable pose) or `stable_poses`."""
 
         model_config = ConfigDict(
-            extra="forbid", title="ObjectIn", json_schema_extra={**ONE_SHAPE, **_OBJECT_EXAMPLES}
+            extra="forbid", title="ObjectIn", json_schema_extra={**ONE_SHAPE, **OBJECT_EXAMPLES}
         )
         name: t.Name
         outline: t.Ring | None = None
@@ -445,7 +428,7 @@ def _session_create(
         bounds, safe circle, the sensor's place on it, strategy and allowed outliers."""
 
         model_config = ConfigDict(
-            extra="forbid", title="SessionCreate", json_schema_extra=_SESSION_EXAMPLES
+            extra="forbid", title="SessionCreate", json_schema_extra=SESSION_EXAMPLES
         )
         objects: Annotated[
             list[ObjectRef], Field(min_length=1, max_length=settings.max_objects_per_session)
@@ -492,7 +475,7 @@ def _observation_in(t: _Shapes) -> type[BaseModel]:
         """One executed sensing path and what it touched (`contact` null: nothing)."""
 
         model_config = ConfigDict(
-            extra="forbid", title="ObservationIn", json_schema_extra=_OBSERVATION_EXAMPLES
+            extra="forbid", title="ObservationIn", json_schema_extra=OBSERVATION_EXAMPLES
         )
         path: PathIn
         contact: ContactIn | None = None

@@ -17,6 +17,7 @@ from app.errors import (
     UnsupportedMediaTypeError,
 )
 from app.routes import PROBLEMS
+from app.schema_examples import BOX_OFF
 from app.schemas import MESH_MEDIA_TYPES, NAME_PATTERN, InputModels
 from app.settings import Settings
 from app.store_types import ObjectConflictError
@@ -55,24 +56,25 @@ _MESH_RESPONSES = {
     200: {"model": ObjectCreated, "description": "the same object was there"},
     415: {"model": Problem, "description": "not a binary or model/* Content-Type"},
 }
-# A 60 x 40 x 20 box in OFF (text), which the docs page and API testers can send as
-# it is with file_type=off: it lies on any of its faces.
-_BOX_OFF = (
-    "OFF\n8 6 0\n"
-    "0 0 0\n60 0 0\n60 40 0\n0 40 0\n0 0 20\n60 0 20\n60 40 20\n0 40 20\n"
-    "4 0 3 2 1\n4 4 5 6 7\n4 0 1 5 4\n4 1 2 6 5\n4 2 3 7 6\n4 3 0 4 7\n"
-)
 _MESH_BODY = {
     "requestBody": {
         "required": True,
         "content": {
             "application/octet-stream": {
                 "schema": {"type": "string", "format": "binary"},
-                "example": _BOX_OFF,
+                "example": BOX_OFF,
             }
         },
     }
 }
+
+_MeshHeight = Annotated[
+    float, Query(gt=0, le=1e6, description="slice height above the table", examples=[5.0])
+]
+_MeshName = Annotated[
+    str, Query(min_length=1, max_length=200, pattern=NAME_PATTERN, examples=["box"])
+]
+_MeshFileType = Annotated[Literal["stl", "obj", "ply", "off", "glb"], Query(examples=["off"])]
 
 
 def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
@@ -142,16 +144,9 @@ def build_router(inputs: InputModels, settings: Settings) -> APIRouter:
         service: ServiceDep,
         client: ClientDep,
         response: Response,
-        height: Annotated[
-            float,
-            Query(gt=0, le=1e6, description="slice height above the table", examples=[5.0]),
-        ],
-        name: Annotated[
-            str, Query(min_length=1, max_length=200, pattern=NAME_PATTERN, examples=["box"])
-        ],
-        file_type: Annotated[
-            Literal["stl", "obj", "ply", "off", "glb"], Query(examples=["off"])
-        ] = "stl",
+        height: _MeshHeight,
+        name: _MeshName,
+        file_type: _MeshFileType = "stl",
         max_poses: Annotated[int | None, Query(ge=1, le=64)] = None,
         heights: Annotated[
             list[Annotated[float, Field(gt=0, le=1e6)]] | None,
