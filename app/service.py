@@ -11,6 +11,8 @@ and decides where work runs:
   calls run in threads behind a third (``db_pool_size``); the event loop never
   blocks. A request makes as few trips to the CPU workers as it can (under load
   each trip waits for a free worker).
+- A CPU job still running after ``cpu_job_deadline_s`` is stopped in its thread
+  (:mod:`app.deadline`) and answered 503 with Retry-After.
 - One lock per session id: two requests on one session never compute on stale
   state; across worker processes the store's version compare-and-swap does the
   same (a lost race is recomputed, or answered 412 when the client sent If-Match).
@@ -47,6 +49,7 @@ from app.convert import (
     strategy_config,
     to_json,
 )
+from app.deadline import JobStoppedError, with_deadline
 from app.errors import (
     ConflictError,
     IdempotencyInFlightError,
@@ -126,7 +129,17 @@ class SessionService:
                 f"(max_cpu_queue {self.settings.max_cpu_queue}); retry shortly",
                 headers={"Retry-After": "1"},
             )
-        return await anyio.to_thread.run_sync(fn, *args, limiter=self.cpu)
+        deadline = self.settings.cpu_job_deadline_s
+        try:
+            return await anyio.to_thread.run_sync(
+                with_deadline(fn, deadline), *args, limiter=self.cpu
+            )
+        except JobStoppedError as exc:
+            raise UnavailableError(
+                f"the work of this request was {exc} (cpu_job_deadline_s {deadline:g}); "
+                "retry later, or with fewer objects, poses or observations",
+                headers={"Retry-After": "5"},
+            ) from None
 
     async def run_light(self, fn: Callable[..., _T], *args: Any) -> _T:
         """Short CPU work (encoding an answer) that should not queue behind plans."""

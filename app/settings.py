@@ -48,6 +48,14 @@ class Settings(BaseSettings):
         description="fits and plans that may wait for a CPU worker; more are answered 503 "
         "with Retry-After (back-pressure instead of an ever longer wait)",
     )
+    cpu_job_deadline_s: float | None = Field(
+        20.0,
+        gt=0,
+        le=3600,
+        description="a fit, plan or picture still running after this long is stopped and "
+        "answered 503 with Retry-After (null: never); above max_plan_budget_ms, which "
+        "plans keep to themselves",
+    )
     limit_concurrency: int | None = Field(
         512, ge=1, le=1_000_000, description="connections uvicorn serves at once; more get 503"
     )
@@ -168,4 +176,8 @@ class Settings(BaseSettings):
             raise ValueError("default_budget_ms must not exceed max_plan_budget_ms")
         if self.default_budget_work > self.max_plan_budget_work:
             raise ValueError("default_budget_work must not exceed max_plan_budget_work")
+        if self.cpu_job_deadline_s is not None and (
+            self.cpu_job_deadline_s * 1000 <= self.max_plan_budget_ms
+        ):
+            raise ValueError("cpu_job_deadline_s must exceed max_plan_budget_ms")
         return self
