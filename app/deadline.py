@@ -19,7 +19,12 @@ import threading
 from collections.abc import Callable
 from typing import Any, TypeVar
 
-__all__ = ["JobStoppedError", "with_deadline"]
+import anyio
+import anyio.to_thread
+
+from app.errors import UnavailableError
+
+__all__ = ["JobStoppedError", "run_stopped_at", "with_deadline"]
 
 _T = TypeVar("_T")
 _set_async_exc = ctypes.pythonapi.PyThreadState_SetAsyncExc
@@ -76,3 +81,18 @@ def with_deadline(fn: Callable[..., _T], seconds: float | None) -> Callable[...,
         return result
 
     return run
+
+
+async def run_stopped_at(
+    seconds: float | None, fn: Callable[..., _T], *args: Any, limiter: anyio.CapacityLimiter
+) -> _T:
+    """`fn(*args)` in a worker thread behind `limiter`, stopped after `seconds`
+    (``cpu_job_deadline_s``) and then answered 503 with Retry-After."""
+    try:
+        return await anyio.to_thread.run_sync(with_deadline(fn, seconds), *args, limiter=limiter)
+    except JobStoppedError as exc:
+        raise UnavailableError(
+            f"the work of this request was {exc} (cpu_job_deadline_s {seconds:g}); "
+            "retry later, or with fewer objects, poses or observations",
+            headers={"Retry-After": "5"},
+        ) from None

@@ -49,7 +49,7 @@ from app.convert import (
     strategy_config,
     to_json,
 )
-from app.deadline import JobStoppedError, with_deadline
+from app.deadline import run_stopped_at
 from app.errors import (
     ConflictError,
     IdempotencyInFlightError,
@@ -129,17 +129,7 @@ class SessionService:
                 f"(max_cpu_queue {self.settings.max_cpu_queue}); retry shortly",
                 headers={"Retry-After": "1"},
             )
-        deadline = self.settings.cpu_job_deadline_s
-        try:
-            return await anyio.to_thread.run_sync(
-                with_deadline(fn, deadline), *args, limiter=self.cpu
-            )
-        except JobStoppedError as exc:
-            raise UnavailableError(
-                f"the work of this request was {exc} (cpu_job_deadline_s {deadline:g}); "
-                "retry later, or with fewer objects, poses or observations",
-                headers={"Retry-After": "5"},
-            ) from None
+        return await run_stopped_at(self.settings.cpu_job_deadline_s, fn, *args, limiter=self.cpu)
 
     async def run_light(self, fn: Callable[..., _T], *args: Any) -> _T:
         """Short CPU work (encoding an answer) that should not queue behind plans."""
