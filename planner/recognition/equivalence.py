@@ -17,8 +17,12 @@ they sample is not known yet.
 Outline distance: the larger of the two directed distances from the points of
 one posed outline's boundary (holes included) to the faces of the other, a
 symmetric Hausdorff distance between the boundaries measured at every vertex
-and at `EDGE_SAMPLES` points inside every face (vertices alone miss a
-non-convex outline turned so that its corners fall on the other's edges). Only
+and at up to `EDGE_SAMPLES` points inside every face (vertices alone miss a
+non-convex outline turned so that its corners fall on the other's edges), no
+closer together than ``SAMPLE_SPACING * tau``: a curve drawn with hundreds of
+short faces is measured at about as many points as its length needs, not seven
+more per face, and any point of its boundary lies within ``tau / 8`` of a
+measured one. Only
 pairs that can pass are measured: when every vertex of A lies within d of B's
 faces and back, the support functions ``h(u) = max_v u.v`` of the two vertex
 sets differ by at most d in every direction u, so a k-d tree over the support
@@ -53,6 +57,7 @@ from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
+import shapely
 from scipy.spatial import cKDTree
 
 from planner.geometry import rotation_matrices
@@ -82,8 +87,10 @@ CHUNK_ELEMENTS = 1_000_000
 BRUTE_FORCE_FACES = 64
 #: The most points one stable pose's k-d tree holds along its faces.
 MAX_TREE_POINTS = 20_000
-#: Points measured inside each face, besides its ends.
+#: The most points measured inside each face, besides its ends.
 EDGE_SAMPLES = 7
+#: The least spacing of those points, as a share of the symmetry tolerance.
+SAMPLE_SPACING = 0.25
 #: Points of an outline checked first against the other's tree, before all of them.
 SCREEN_POINTS = 64
 #: Probe points whose distances to each posed outline also find candidate pairs:
@@ -110,11 +117,12 @@ FIRST_KEYS = np.array([0, 3, 6, 9, len(SUPPORT_DIRECTIONS) + PROBE_GRID**2 // 2,
 @dataclass(frozen=True, eq=False)
 class PosedRings:
     """Posed outlines of N hypotheses of one stable pose: `points` (N, P, 2) on the
-    boundary in the world frame (every vertex and `EDGE_SAMPLES` points inside
-    each face), `starts`/`ends` (N, F, 2) of every face, and `support` (N, K): the
-    support function of the vertices in the K directions of
-    :data:`SUPPORT_DIRECTIONS`; the poses `theta` (N,) and `t` (N, 2), and the
-    stable pose's faces in its model frame, `model_starts`/`model_ends` (F, 2)."""
+    boundary in the world frame (every vertex and up to `EDGE_SAMPLES` points
+    inside each face), `starts`/`ends` (N, F, 2) of every face, and `support`
+    (N, K): the support function of the vertices in the K directions of
+    :data:`SUPPORT_DIRECTIONS`; the poses `theta` (N,) and `t` (N, 2), the stable
+    pose's faces in its model frame, `model_starts`/`model_ends` (F, 2), and `gap`:
+    the longest step between two consecutive points along a face."""
 
     points: np.ndarray
     starts: np.ndarray
@@ -124,12 +132,18 @@ class PosedRings:
     t: np.ndarray
     model_starts: np.ndarray
     model_ends: np.ndarray
+    gap: float
     _trees: dict[float, tuple[cKDTree, float]] = field(default_factory=dict, repr=False)
 
     @classmethod
-    def of(cls, stable: StablePose, theta: np.ndarray, t: np.ndarray) -> PosedRings:
+    def of(
+        cls, stable: StablePose, theta: np.ndarray, t: np.ndarray, spacing: float = 0.0
+    ) -> PosedRings:
         """The stable pose moved to each pose (theta (N,), t (N, 2)):
-        ``v_world = R(theta) v_model + t``."""
+        ``v_world = R(theta) v_model + t``. A face holds `EDGE_SAMPLES` points
+        inside, or fewer where they would lie closer than `spacing` (the short faces
+        of a finely drawn curve): any point of a face then lies within
+        ``max(spacing, gap) / 2`` of a measured one."""
         theta = np.asarray(theta, dtype=float).reshape(-1)
         R = rotation_matrices(theta)
         t = np.asarray(t, dtype=float).reshape(-1, 2)
@@ -138,14 +152,19 @@ class PosedRings:
             return np.einsum("nij,vj->nvi", R, points) + t[:, None, :]
 
         faces = stable.faces
-        share = np.arange(EDGE_SAMPLES + 1) / (EDGE_SAMPLES + 1)
-        along = faces.start[:, None, :] + share[None, :, None] * (faces.end - faces.start)[:, None]
-        starts = move(faces.start)
+        a, b = np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float)
+        length = np.hypot(*(b - a).T)
+        room = np.floor(length / spacing) if spacing > 0 else np.full(len(length), np.inf)
+        inside = np.minimum(EDGE_SAMPLES, room)
+        steps = inside.astype(np.int64) + 1  # points per face, its start included
+        face = np.repeat(np.arange(len(a)), steps)
+        first = np.repeat(np.cumsum(steps) - steps, steps)
+        share = (np.arange(len(face)) - first) / steps[face]
+        along = a[face] + share[:, None] * (b - a)[face]
+        starts = move(a)
         support = (starts @ SUPPORT_DIRECTIONS.T).max(axis=1)
-        return cls(
-            move(along.reshape(-1, 2)), starts, move(faces.end), support, theta, t,
-            np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float),
-        )  # fmt: skip
+        gap = float((length / steps).max(initial=0.0))
+        return cls(move(along), starts, move(b), support, theta, t, a, b, gap)
 
     def __len__(self) -> int:
         return len(self.support)
@@ -292,18 +311,14 @@ def _spread(count: int) -> np.ndarray:
 
 
 def _probe_distances(rings: Sequence[PosedRings], probes: np.ndarray) -> np.ndarray:
-    """(N, J) distance from each probe point (J, 2) to each posed outline's faces, in
-    chunks of at most CHUNK_ELEMENTS probe x face pairs."""
+    """(N, J) distance from each probe point (J, 2) to each posed outline's faces:
+    the probes moved into each hypothesis' model frame, measured against the
+    stable pose's faces in one vectorized pass of shapely."""
     out = []
     for r in rings:
-        faces = r.starts.shape[1]
-        step = max(1, CHUNK_ELEMENTS // max(1, len(probes) * faces))
-        d = np.empty((len(r), len(probes)))
-        for lo in range(0, len(r), step):
-            n = min(step, len(r) - lo)
-            q = np.broadcast_to(probes, (n, *probes.shape))
-            d[lo : lo + n] = _nearest_face(q, r.starts[lo : lo + n], r.ends[lo : lo + n])
-        out.append(d)
+        faces = shapely.multilinestrings(np.stack([r.model_starts, r.model_ends], axis=1))
+        q = r.to_model(np.broadcast_to(probes, (len(r), *probes.shape)), np.arange(len(r)))
+        out.append(shapely.distance(shapely.points(q), faces))
     return np.concatenate(out)
 
 
@@ -320,9 +335,7 @@ def _screen_keys(rings: Sequence[PosedRings], leader: tuple[int, int], tau: floa
     gx, gy = np.meshgrid(x0 + side * (x1 - x0), y0 + side * (y1 - y0))
     along = points[np.linspace(0, len(points) - 1, min(PROBES, len(points))).astype(np.int64)]
     probes = np.vstack([np.column_stack([gx.ravel(), gy.ravel()]), along])
-    gap = max(
-        float(np.hypot(*(r.model_ends - r.model_starts).T).max(initial=0.0)) for r in rings
-    ) / (EDGE_SAMPLES + 1)
+    gap = max(r.gap for r in rings)
     scale = (tau / 2) / (tau / 2 + gap / 2) if tau > 0 else 0.0
     return np.hstack([support, _probe_distances(rings, probes) * scale])
 

@@ -33,6 +33,7 @@ from planner.models.heights import check_height, probing_heights
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.equivalence import (
+    SAMPLE_SPACING,
     SYMMETRY_FLOOR,
     PosedRings,
     equivalence_classes,
@@ -48,6 +49,7 @@ from planner.types import (
     Observation,
     Pose,
     SensorBounds,
+    StablePose,
     Workspace,
 )
 
@@ -282,10 +284,11 @@ class Session:
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
         labels = _interpretation_labels(cands)
+        gap = SAMPLE_SPACING * tau
         # one class: the outlines coincide at every probing height
         per_height = [
             equivalence_classes(
-                [PosedRings.of(self._groups[c.group].stable.layer(z), c.theta, c.t) for c in cands],
+                [PosedRings.of(self._stable(c, z), c.theta, c.t, gap) for c in cands],
                 order,
                 labels,
                 tau,
@@ -295,6 +298,9 @@ class Session:
         if len(per_height) == 1:
             return per_height[0]
         return np.unique(np.column_stack(per_height), axis=0, return_inverse=True)[1].ravel()
+
+    def _stable(self, cands: PoseSamples, height: float | None) -> StablePose:
+        return self._groups[cands.group].stable.layer(height)
 
     @property
     def status(self) -> Status:

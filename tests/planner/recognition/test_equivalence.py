@@ -16,10 +16,12 @@ import pytest
 import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
+from scipy.spatial import cKDTree
 
 from hardware_sim.world import random_world
 from planner.models.library import object_from_dict
 from planner.recognition.equivalence import (
+    EDGE_SAMPLES,
     PosedRings,
     equivalence_classes,
     outline_distance,
@@ -111,6 +113,29 @@ def test_outline_distance_is_the_same_in_chunks_of_any_size(monkeypatch):
     monkeypatch.setattr("planner.recognition.equivalence.CHUNK_ELEMENTS", 1)
     np.testing.assert_array_equal(outline_distance(rings, 0, rings, np.arange(9)), whole)
     assert whole[0] < 1e-9 and np.all(np.diff(whole) > 0)
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**16), st.sampled_from([3, 7, 60, 500]), st.floats(0.0, 4.0))
+def test_every_boundary_point_lies_near_a_measured_one(seed, n, spacing):
+    # short faces hold fewer points, never so few that a stretch of boundary goes
+    # unmeasured: every point of a face lies within max(spacing, gap) / 2 of one
+    rng = np.random.default_rng(seed)
+    a = np.sort(rng.uniform(0, 2 * np.pi, n)) if n > 3 else np.array([0.0, 2.0, 4.0])
+    r = 30 * (1 + 0.5 * rng.random(n))
+    ring = np.column_stack([r * np.cos(a), r * np.sin(a)])
+    stable = object_from_dict({"name": "p", "outline": ring.tolist()}).stable_poses[0]
+    theta, t = rng.normal(0, 1, 2), rng.normal(0, 5, (2, 2))
+    rings = PosedRings.of(stable, theta, t, spacing)
+    full = PosedRings.of(stable, theta, t)
+    assert full.points.shape[1] == len(stable.faces.start) * (EDGE_SAMPLES + 1)
+    assert rings.points.shape[1] <= full.points.shape[1]
+    assert rings.gap <= max(spacing, full.gap) + 1e-12
+    # dense points along every face of the first pose, against the measured ones
+    u = np.linspace(0, 1, 41)[:, None, None]
+    dense = rings.starts[0] + u * (rings.ends[0] - rings.starts[0])
+    gaps, _ = cKDTree(rings.points[0]).query(dense.reshape(-1, 2))
+    assert gaps.max() <= max(spacing, full.gap) / 2 + 1e-9
 
 
 @settings(max_examples=60, deadline=None)
