@@ -21,8 +21,8 @@ and at up to `EDGE_SAMPLES` points inside every face (vertices alone miss a
 non-convex outline turned so that its corners fall on the other's edges), no
 closer together than ``SAMPLE_SPACING * tau``: a curve drawn with hundreds of
 short faces is measured at about as many points as its length needs, not seven
-more per face, and any point of its boundary lies within ``tau / 8`` of a
-measured one. Only
+more per face; a point of a short face lies within ``tau / 8`` of a measured
+one, a point of a long face within a sixteenth of its length (`gap`). Only
 pairs that can pass are measured: when every vertex of A lies within d of B's
 faces and back, the support functions ``h(u) = max_v u.v`` of the two vertex
 sets differ by at most d in every direction u, so a k-d tree over the support
@@ -156,11 +156,8 @@ class PosedRings:
         length = np.hypot(*(b - a).T)
         room = np.floor(length / spacing) if spacing > 0 else np.full(len(length), np.inf)
         inside = np.minimum(EDGE_SAMPLES, room)
-        steps = inside.astype(np.int64) + 1  # points per face, its start included
-        face = np.repeat(np.arange(len(a)), steps)
-        first = np.repeat(np.cumsum(steps) - steps, steps)
-        share = (np.arange(len(face)) - first) / steps[face]
-        along = a[face] + share[:, None] * (b - a)[face]
+        steps = inside.astype(np.int64) + 1
+        along = _along(a, b, steps, ends=False)  # the next face's start is this one's end
         starts = move(a)
         support = (starts @ SUPPORT_DIRECTIONS.T).max(axis=1)
         gap = float((length / steps).max(initial=0.0))
@@ -185,13 +182,20 @@ class PosedRings:
             length = np.hypot(e[:, 0], e[:, 1])
             h = max(spacing, float(length.sum()) / MAX_TREE_POINTS, 1e-300)
             steps = np.maximum(1, np.ceil(length / h)).astype(np.int64)
-            face = np.repeat(np.arange(len(length)), steps + 1)
-            first = np.repeat(np.cumsum(steps + 1) - (steps + 1), steps + 1)
-            u = (np.arange(len(face)) - first) / steps[face]
-            pts = self.model_starts[face] + u[:, None] * e[face]
+            pts = _along(self.model_starts, self.model_ends, steps, ends=True)
             known = (cKDTree(pts), float((length / steps).max(initial=0.0)))
             self._trees[spacing] = known
         return known
+
+
+def _along(a: np.ndarray, b: np.ndarray, steps: np.ndarray, *, ends: bool) -> np.ndarray:
+    """Points splitting each face a[f] -> b[f] (F, 2 each) into steps[f] equal steps,
+    face after face: its start and the points inside, and its end when `ends`."""
+    count = steps + 1 if ends else steps
+    face = np.repeat(np.arange(len(a)), count)
+    first = np.repeat(np.cumsum(count) - count, count)
+    share = (np.arange(len(face)) - first) / steps[face]
+    return a[face] + share[:, None] * (b - a)[face]
 
 
 def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:

@@ -284,11 +284,11 @@ class Session:
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
         labels = _interpretation_labels(cands)
-        gap = SAMPLE_SPACING * tau
+        spacing = SAMPLE_SPACING * tau  # of the points measured along each face
         # one class: the outlines coincide at every probing height
         per_height = [
             equivalence_classes(
-                [PosedRings.of(self._stable(c, z), c.theta, c.t, gap) for c in cands],
+                [PosedRings.of(self._stable(c, z), c.theta, c.t, spacing) for c in cands],
                 order,
                 labels,
                 tau,
