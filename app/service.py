@@ -11,8 +11,7 @@ and decides where work runs:
   calls run in threads behind a third (``db_pool_size``); the event loop never
   blocks. A request makes as few trips to the CPU workers as it can (under load
   each trip waits for a free worker).
-- A CPU job still running after ``cpu_job_deadline_s`` is stopped in its thread
-  (:mod:`app.deadline`) and answered 503 with Retry-After.
+- A CPU job still running after ``cpu_job_deadline_s`` is stopped: 503 (:mod:`app.deadline`).
 - One lock per session id: two requests on one session never compute on stale
   state; across worker processes the store's version compare-and-swap does the
   same (a lost race is recomputed, or answered 412 when the client sent If-Match).
@@ -257,7 +256,8 @@ class SessionService:
 
             def prepare() -> tuple[SessionRecord, Session, bytes]:
                 # one trip to the CPU workers: under load each trip waits behind plans
-                cfg = session_config(body, resolve_models(body["objects"], stored))
+                worked = self.settings.max_worked_vertices
+                cfg = session_config(body, resolve_models(body["objects"], stored), worked)
                 record = SessionRecord(str(uuid.uuid4()), 1, cfg, (), 0.0, owner)
                 session = derive(build_session(record))
                 return record, session, session_json(record.id, 1, cfg, session, limit)

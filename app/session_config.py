@@ -23,9 +23,10 @@ from planner.codec import (
     workspace_to_dict,
 )
 from planner.models.library import object_from_dict, object_to_dict
+from planner.models.simplify import simplify_models
 from planner.types import ObjectModel, SensorBounds, Workspace
 
-__all__ = ["resolve_models", "session_config"]
+__all__ = ["check_worked_size", "resolve_models", "session_config"]
 
 
 def resolve_models(
@@ -57,12 +58,41 @@ def resolve_models(
     return models
 
 
-def session_config(body: Mapping[str, Any], models: Sequence[ObjectModel]) -> dict[str, Any]:
+def check_worked_size(models: Sequence[ObjectModel], sensor: SensorBounds, limit: int) -> None:
+    """Refuses an object whose outline, simplified within the `sensor`'s bounds
+    (:func:`~planner.models.simplify.simplify_models`), still has a ring of more
+    than `limit` vertices: the size the session's work grows with."""
+    worked, _ = simplify_models(models, sensor)
+    for i, (given, m) in enumerate(zip(models, worked, strict=True)):
+        for k, (g, p) in enumerate(zip(given.stable_poses, m.stable_poses, strict=True)):
+            for layer, given_layer in zip(p.layers, g.layers, strict=True):
+                rings = [(len(a), len(b)) for a, b in zip(
+                    [layer.outline, *layer.holes],
+                    [given_layer.outline, *given_layer.holes],
+                    strict=True,
+                )]  # fmt: skip
+                kept, drawn = max(rings)
+                if kept > limit:
+                    raise InvalidInputError(
+                        f"a ring of {drawn} vertices keeps {kept} after simplification "
+                        f"within the sensor's bounds; at most {limit} "
+                        "(max_worked_vertices): draw the part more coarsely or give "
+                        "larger sensor bounds",
+                        field=f"objects[{i}].stable_poses[{k}]",
+                    )
+
+
+def session_config(
+    body: Mapping[str, Any], models: Sequence[ObjectModel], max_worked: int | None = None
+) -> dict[str, Any]:
     """The stored configuration of a session created with `body` over `models`
-    (checked by the planner: sensor bounds, safe circle, strategy)."""
+    (checked by the planner: sensor bounds, safe circle, strategy; and, given
+    `max_worked`, :func:`check_worked_size`)."""
     ws = body["workspace"]
     workspace = Workspace(tuple(ws["center"]), ws["radius"])
     sensor = SensorBounds(**body["sensor"])
+    if max_worked is not None:
+        check_worked_size(models, sensor, max_worked)
     position = body.get("sensor_position") or [
         workspace.center[0] + workspace.radius,
         workspace.center[1],

@@ -62,7 +62,16 @@ class Settings(BaseSettings):
 
     # request limits
     max_body_bytes: int = Field(1_000_000, ge=1024, le=1_000_000_000)
-    max_outline_vertices: int = Field(500, ge=3, le=100_000)
+    max_outline_vertices: int = Field(
+        10_000, ge=3, le=100_000, description="vertices of one ring as given"
+    )
+    max_worked_vertices: int = Field(
+        500,
+        ge=3,
+        le=100_000,
+        description="vertices of one ring a session works with: after a finely drawn "
+        "outline is simplified within the session's sensor bounds",
+    )
     max_holes: int = Field(16, ge=0, le=10_000)
     max_stable_poses: int = Field(32, ge=1, le=10_000)
     max_slices: int = Field(8, ge=1, le=1_000, description="probing heights per stable pose")

@@ -68,7 +68,7 @@ def forecast_distinguishing(
         np.array([path.origin]),
         np.array([path.direction]),
         np.array([path.length]),
-        session.sensor,
+        session.working_sensor,
         config or OutcomeConfig(),
     )
     cls = np.array([h.equivalence_class for h in hypotheses])

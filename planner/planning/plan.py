@@ -67,7 +67,7 @@ def plan_session(
     result = plan(
         session.hypotheses,
         session.models,
-        session.sensor,
+        session.working_sensor,
         session.workspace,
         sensor_position,
         config,

@@ -30,6 +30,7 @@ import numpy as np
 from planner.errors import InvalidObservationError
 from planner.memo import cached_property
 from planner.models.heights import check_height, probing_heights
+from planner.models.simplify import simplify_models, widened
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.equivalence import (
@@ -96,11 +97,20 @@ class Session:
         names = [m.name for m in models]
         if len(set(names)) != len(names):
             raise InvalidObservationError("object names must be unique", field="objects")
-        self.models: tuple[ObjectModel, ...] = tuple(models)
         self.sensor = sensor or SensorBounds()
+        #: the objects as given; `models` are what the session works with: finely
+        #: drawn outlines simplified within the sensor's bounds (DESIGN §4.1), and
+        #: `deviation` how far those stray from the given ones
+        self.given_models: tuple[ObjectModel, ...] = tuple(models)
+        if _parent is not None:
+            self.models, self.deviation = _parent.models, _parent.deviation
+        else:
+            self.models, self.deviation = simplify_models(self.given_models, self.sensor)
+        #: the sensor bounds against the worked outlines (widened by `deviation`)
+        self.working_sensor = widened(self.sensor, self.deviation)
         # the recognition's view of the contacts: on the surface, with a ball tip's
         # centre moved back by its radius (DESIGN §4.14)
-        self.bounds = surface_bounds(self.sensor)
+        self.bounds = surface_bounds(self.working_sensor)
         self.workspace = workspace or Workspace()
         self.config = config or RecognitionConfig()
         self.observations: tuple[Observation, ...] = tuple(observations)
@@ -125,7 +135,7 @@ class Session:
         Refuses a path height some object has no slice at."""
         check_height(self.models, observation.path.height)
         return Session(
-            self.models,
+            self.given_models,
             self.sensor,
             self.workspace,
             self.config,
@@ -141,7 +151,7 @@ class Session:
         if self._parent is not None:
             return self._parent
         return Session(
-            self.models,
+            self.given_models,
             self.sensor,
             self.workspace,
             self.config,
@@ -183,7 +193,7 @@ class Session:
         if self._parent is not None:
             parent_level = self._parent._derived.level
         else:
-            prefix = Session(self.models, self.sensor, self.workspace, self.config)
+            prefix = Session(self.given_models, self.sensor, self.workspace, self.config)
             for obs in self.observations[:-1]:
                 prefix = prefix.observe(obs)
             parent_level = prefix._derived.level if self.observations else None

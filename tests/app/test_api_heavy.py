@@ -127,7 +127,21 @@ def test_round_outlines_are_answered_or_refused_by_their_limit(served):
     client, _ = served
     r = session_with(client, [{"name": "g200", "outline": gon(200)}], [hit(40)])
     assert [x.status_code for x in r] == [201, 201]
-    (refused,) = session_with(client, [{"name": "g2000", "outline": gon(2000)}], [hit(40)])
+    # finely drawn curves are worked with simplified within the sensor's bounds
+    for n in (2000, 5000):
+        r = session_with(client, [{"name": f"g{n}", "outline": gon(n)}], [hit(40)])
+        assert [x.status_code for x in r] == [201, 201]
+        assert r[1].json()["hypothesis_count"] > 0
+    # ... and what no simplification makes smaller is refused by that limit
+    zigzag = [[(40 - 3 * (k % 2)) * x / 40, (40 - 3 * (k % 2)) * y / 40]
+              for k, (x, y) in enumerate(gon(2000))]  # fmt: skip
+    (refused,) = session_with(client, [{"name": "zigzag", "outline": zigzag}], [hit(40)])
+    assert refused.status_code == 422
+    error = refused.json()["errors"][0]
+    assert error["field"] == "objects[0].stable_poses[0]", error
+    assert "max_worked_vertices" in error["message"]
+    # and more vertices than any ring may have by the schema's
+    (refused,) = session_with(client, [{"name": "g12000", "outline": gon(12000)}], [hit(40)])
     assert refused.status_code == 422 and "outline" in refused.json()["errors"][0]["field"]
 
 
@@ -245,7 +259,9 @@ def test_a_request_past_the_memory_cap_is_503_and_the_server_goes_on(tmp_path):
     ):
         holes = [gon(100, 3, (-45 + 30 * (i % 4), -45 + 30 * (i // 4)))[::-1] for i in range(16)]
         part = {"name": "holey", "outline": gon(500, 90), "holes": holes}
-        r = session_with(client, [part], [hit(90)])
+        # a normal bound so tight that the ring is worked with as drawn
+        sharp = {"position_error": 1.0, "normal_error": 0.012}
+        r = session_with(client, [part], [hit(90)], sensor=sharp)
         assert r[-1].status_code == 503 and "max_memory_bytes" in r[-1].json()["detail"]
         assert r[-1].headers["retry-after"]
         assert client.get("/healthz").status_code == 200

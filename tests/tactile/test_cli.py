@@ -113,12 +113,16 @@ def test_demo_that_runs_out_of_touches_exits_1(tmp_path, capsys):
 
 
 def test_demo_with_objects_the_service_refuses_names_the_limit(tmp_path, capsys):
-    ring = [[40 * math.cos(a), 40 * math.sin(a)] for a in np.linspace(0, 6.28, 600)]
+    # a zigzag of 600 vertices: nothing to simplify, past the worked ring limit
+    ring = [
+        [(40 - 3 * (k % 2)) * math.cos(a), (40 - 3 * (k % 2)) * math.sin(a)]
+        for k, a in enumerate(np.linspace(0, 2 * math.pi, 600, endpoint=False))
+    ]
     path = tmp_path / "big.json"
     path.write_text(json.dumps({"objects": [{"name": "big", "outline": ring}]}))
     assert main(["demo", "--objects", str(path), "--out", str(tmp_path / "d.png")]) == 2
     err = capsys.readouterr().err
-    assert "422" in err and "outline" in err and "500" in err
+    assert "422" in err and "max_worked_vertices" in err and "500" in err
 
 
 def test_import_mesh_slices_at_several_heights(tmp_path):
