@@ -32,6 +32,7 @@ from planner.memo import cached_property
 from planner.models.heights import check_height, probing_heights
 from planner.models.simplify import simplify_models, widened
 from planner.models.tip import surface_bounds, surface_contact
+from planner.recognition.class_join import join_classes
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.equivalence import (
     SAMPLE_SPACING,
@@ -238,16 +239,27 @@ class Session:
         cost of :attr:`hypotheses`."""
         return sum(len(c.weight) for c in self._derived.candidates)
 
-    @cached_property
+    @property
     def hypotheses(self) -> list[Hypothesis]:
         """Weighted hypotheses, most probable first, with equivalence classes."""
+        return self._ranked[0]
+
+    @property
+    def joined_classes(self) -> frozenset[int]:
+        """The classes (as numbered in :attr:`hypotheses`) that leaders split and a
+        join made one (:mod:`planner.recognition.class_join`): their members lie
+        within ``tau`` of the leader, not ``tau / 2``."""
+        return self._ranked[1]
+
+    @cached_property
+    def _ranked(self) -> tuple[list[Hypothesis], frozenset[int]]:
         cands = [c for c in self._derived.candidates if len(c.weight)]
         if not cands:
-            return []
+            return [], frozenset()
         weight = np.concatenate([c.weight for c in cands])
         total = weight.sum()
         prob = weight / total if total > 0 else np.full(len(weight), 1 / len(weight))
-        classes = self._equivalence(cands, prob)
+        classes, wide = self._equivalence(cands, prob)
         class_prob = np.bincount(classes, weights=prob)
         rank = np.empty(len(class_prob), np.int64)
         rank[np.argsort(-class_prob, kind="stable")] = np.arange(len(class_prob))
@@ -274,7 +286,7 @@ class Session:
                 )
                 i += 1
         out.sort(key=lambda h: (-h.probability, h.equivalence_class))
-        return out
+        return out, frozenset(int(rank[c]) for c in np.unique(classes[wide]))
 
     @cached_property
     def symmetry_tolerance(self) -> float:
@@ -288,26 +300,31 @@ class Session:
                 tau = max(tau, float(np.median(np.concatenate(core))) / 2)
         return tau
 
-    def _equivalence(self, cands: list[PoseSamples], prob: np.ndarray) -> np.ndarray:
+    def _equivalence(
+        self, cands: list[PoseSamples], prob: np.ndarray
+    ) -> tuple[np.ndarray, np.ndarray]:
         """Class label per hypothesis (:mod:`planner.recognition.equivalence`): posed
-        outlines within the symmetry tolerance of each other, most probable first."""
+        outlines within the symmetry tolerance of each other, most probable first,
+        classes the leaders split joined where they coincide
+        (:mod:`planner.recognition.class_join`); and per hypothesis whether its
+        class was joined."""
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
         labels = _interpretation_labels(cands)
         spacing = SAMPLE_SPACING * tau  # of the points measured along each face
         # one class: the outlines coincide at every probing height
-        per_height = [
-            equivalence_classes(
-                [PosedRings.of(self._stable(c, z), c.theta, c.t, spacing) for c in cands],
-                order,
-                labels,
-                tau,
+        per_height, wide = [], np.zeros(len(prob), dtype=bool)
+        for z in probing_heights(self.models):
+            rings = [PosedRings.of(self._stable(c, z), c.theta, c.t, spacing) for c in cands]
+            label, joined = join_classes(
+                rings, equivalence_classes(rings, order, labels, tau), order, labels, tau
             )
-            for z in probing_heights(self.models)
-        ]
+            per_height.append(label)
+            wide |= joined[label]
         if len(per_height) == 1:
-            return per_height[0]
-        return np.unique(np.column_stack(per_height), axis=0, return_inverse=True)[1].ravel()
+            return per_height[0], wide
+        classes = np.unique(np.column_stack(per_height), axis=0, return_inverse=True)[1].ravel()
+        return classes, wide
 
     def _stable(self, cands: PoseSamples, height: float | None) -> StablePose:
         return self._groups[cands.group].stable.layer(height)
@@ -332,9 +349,9 @@ class Session:
             return Localization(0, None, self.accuracy, ("one_class",))
         best = hyps[0].equivalence_class
         members = [h for h in hyps if h.equivalence_class == best]
-        half = self.symmetry_tolerance / 2
-        # the members lie within tau/2 of the leader's outline: the class bound is
-        # the widest member's, its outline disk widened by tau (diameter)
+        # the members lie within tau/2 of the leader's outline (tau in a joined class):
+        # the class bound is the widest member's, its outline disk widened by as much
+        half = self.symmetry_tolerance / (1 if best in self.joined_classes else 2)
         bound = ErrorBound(
             max(h.error_bound.translation for h in members) + half,
             max(h.error_bound.rotation for h in members),

@@ -1,0 +1,85 @@
+"""Classes the leaders split are joined where every member lies within tau of
+every other (complete linkage): a class still never chains, and a curved part's
+continuum of nearby poses is not left as two classes no touch can tell apart."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from planner.models.library import object_from_dict
+from planner.recognition.class_join import join_classes
+from planner.recognition.equivalence import PosedRings, equivalence_classes, pair_distances
+
+SQUARE = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+T = np.linspace(0, 2 * math.pi, 60, endpoint=False)
+ELLIPSE = object_from_dict(
+    {"name": "el", "outline": np.column_stack([30 * np.cos(T), 18 * np.sin(T)]).tolist()}
+)
+
+
+def translates(xs, stable=SQUARE.stable_poses[0]):
+    xs = np.asarray(xs, dtype=float)
+    return [PosedRings.of(stable, np.zeros(len(xs)), np.column_stack([xs, np.zeros(len(xs))]))]
+
+
+def classes(rings, tau, family=None, **kw):
+    n = sum(len(r) for r in rings)
+    order = np.arange(n)
+    family = np.arange(n) if family is None else family
+    return join_classes(
+        rings, equivalence_classes(rings, order, family, tau), order, family, tau, **kw
+    )
+
+
+def test_a_split_that_coincides_within_tau_is_joined():
+    # two outlines 0.6 tau apart: beyond the leader's tau/2, within tau of each other
+    rings = translates([0.0, 0.6])
+    assert len(np.unique(equivalence_classes(rings, np.arange(2), np.arange(2), 1.0))) == 2
+    label, wide = classes(rings, 1.0)
+    assert label.tolist() == [0, 0] and wide.tolist() == [True]
+
+
+def test_a_join_never_chains():
+    # 0.6 tau apart in a row: the first two join, the third lies 1.2 tau from the first
+    label, wide = classes(translates([0.0, 0.6, 1.2]), 1.0)
+    assert label.tolist() == [0, 0, 1]
+    assert wide.tolist() == [True, False]
+
+
+def test_samples_of_one_slide_family_are_never_joined():
+    label, _ = classes(translates([0.0, 0.6]), 1.0, family=np.array([7, 7]))
+    assert label.tolist() == [0, 1]
+
+
+def test_joins_keep_to_their_work_bound():
+    label, wide = classes(translates([0.0, 0.6]), 1.0, max_points=0)
+    assert label.tolist() == [0, 1] and not wide.any()
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(st.integers(0, 2**16), st.floats(0.3, 3.0), st.booleans())
+def test_no_class_holds_two_outlines_farther_apart_than_tau(seed, spread, curved):
+    """Random nearby poses of a square or an ellipse: after joining, every two
+    members of a class lie within tau (the exact distance), and a joined class
+    holds a member beyond tau/2 of its leader only when it says it was joined."""
+    rng = np.random.default_rng(seed)
+    stable = (ELLIPSE if curved else SQUARE).stable_poses[0]
+    n, tau = 14, 1.0
+    theta = rng.normal(0, 0.01 * spread, n)
+    rings = [PosedRings.of(stable, theta, rng.normal(0, 0.4 * spread, (n, 2)))]
+    label, wide = classes(rings, tau)
+    i, j = np.meshgrid(np.arange(n), np.arange(n))
+    d = pair_distances(rings[0], i.ravel(), rings[0], j.ravel()).reshape(n, n)
+    for c in np.unique(label):
+        members = np.flatnonzero(label == c)
+        assert d[np.ix_(members, members)].max() <= tau + 1e-9
+        leader = members.min()  # hypotheses lead in index order here
+        if not wide[c]:
+            assert d[leader, members].max() <= tau / 2 + 1e-9
+    # classes are numbered as their leaders come
+    firsts = [np.flatnonzero(label == c).min() for c in np.unique(label)]
+    assert firsts == sorted(firsts)
