@@ -35,14 +35,17 @@ from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
+from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
 from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath
 
 __all__ = [
+    "FACES_PER_HYPOTHESIS",
     "RecognitionRanking",
     "forecast_distinguishing",
     "recognition_ranking",
+    "update_size",
     "with_forecast",
 ]
 
@@ -83,7 +86,7 @@ def forecast_distinguishing(
         if out.hit[0, row]:
             contact = Contact(tuple(out.point[0, row]), tuple(out.normal[0, row]))
         after = session.observe(Observation(path, contact)).hypotheses
-        budget.spend_updates(1, len(hypotheses))
+        budget.spend_updates(1, update_size(session))
         if len({h.equivalence_class for h in after}) == 1:
             total += float(weight[k])
     return min(total / float(weight.sum()), 1.0)
@@ -168,7 +171,7 @@ def recognition_ranking(
         if rows and budget.exhausted():
             break
         left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
-        budget.spend_updates(len(best), len(posed.weight))
+        budget.spend_updates(len(best), update_size(session))
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))
@@ -180,6 +183,20 @@ def recognition_ranking(
         np.array(expected)[rank],
         current,
     )
+
+
+#: Faces of a hypothesis counted as one in the cost of an update: an outline of
+#: many faces costs as much more to re-check (as a cast cell does).
+FACES_PER_HYPOTHESIS = 12
+
+
+def update_size(session: Session) -> float:
+    """What one observation update of `session` costs in hypotheses: each counted
+    once per `FACES_PER_HYPOTHESIS` of its faces (at least once). A plan works on
+    one hypothesis per class where they are many
+    (:mod:`~planner.planning.representatives`); an update works on all of them."""
+    faces = face_counts(session.hypotheses, session.models_by_name)
+    return float(np.maximum(1.0, np.asarray(faces, dtype=float) / FACES_PER_HYPOTHESIS).sum())
 
 
 def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:

@@ -28,6 +28,7 @@ from planner.planning.config import StrategyConfig
 from planner.planning.forecast import recognition_ranking, with_forecast
 from planner.planning.probes import opening_probe
 from planner.planning.refinement import refinement, scores_after
+from planner.planning.representatives import face_counts, representatives
 from planner.planning.result import REFINING, Plan, PlannedPath
 from planner.planning.scoring import FAMILIES, InformationScores
 from planner.planning.strategies import Ranking, rank_candidates
@@ -64,8 +65,12 @@ def plan_session(
     # may not spend it, and the forecast may spend what the search left
     share = total if total is None or not config.forecast else total * (1 - FORECAST_SHARE)
     budget = Budget(share, config.budget_ms)
+    # one hypothesis per class where the posed faces are many (a finely drawn curve)
+    faces = face_counts(session.hypotheses, session.models_by_name)
     result = plan(
-        session.hypotheses,
+        representatives(
+            session.hypotheses, session.symmetry_tolerance, session.joined_classes, faces
+        ),
         session.models,
         session.working_sensor,
         session.workspace,
