@@ -157,6 +157,11 @@ class LocalizationOut(BaseModel):
         description="empty when localized; one_class while several classes are left, "
         "accuracy while the bound exceeds the session's accuracy"
     )
+    rotation_free: bool = Field(
+        default=False,
+        description="true when the class' outline is round (a disc): every rotation is one "
+        "class, the bound's rotation is pi and the accuracy asks for the translation only",
+    )
 
 
 class RegionOut(BaseModel):

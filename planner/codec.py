@@ -267,8 +267,8 @@ def prior_from_dict(data: Mapping[str, Any] | None) -> PosePrior | None:
 
 def localization_to_dict(loc: Localization) -> dict[str, Any]:
     """How far the session is from `localized`: classes left, the most probable
-    class' bound (null without a hypothesis), and what is missing (``one_class``,
-    ``accuracy``)."""
+    class' bound (null without a hypothesis), what is missing (``one_class``,
+    ``accuracy``), and whether the rotation is free (a round outline's)."""
     bound = None
     if loc.bound is not None:
         bound = {
@@ -276,7 +276,12 @@ def localization_to_dict(loc: Localization) -> dict[str, Any]:
             "rotation": _bounded(loc.bound.rotation),
             "eps_t": _bounded(loc.bound.eps_t),
         }
-    return {"classes": int(loc.classes), "bound": bound, "missing": list(loc.missing)}
+    return {
+        "classes": int(loc.classes),
+        "bound": bound,
+        "missing": list(loc.missing),
+        "rotation_free": bool(loc.rotation_free),
+    }
 
 
 # -- plans ------------------------------------------------------------------------------------

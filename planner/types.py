@@ -187,9 +187,11 @@ class Accuracy:
         """
         return cls(5 * sensor.position_error + 0.02 * diameter, 2 * sensor.normal_error + 0.02)
 
-    def admits(self, bound: ErrorBound) -> bool:
-        """True when `bound` is within this accuracy."""
-        return bound.translation <= self.translation and bound.rotation <= self.rotation
+    def admits(self, bound: ErrorBound, *, rotation_free: bool = False) -> bool:
+        """True when `bound` is within this accuracy (its translation alone when the
+        rotation is free: a round outline's, which no touch can measure)."""
+        turned = rotation_free or bound.rotation <= self.rotation
+        return bound.translation <= self.translation and turned
 
 
 @dataclass(frozen=True)

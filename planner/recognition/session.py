@@ -30,6 +30,7 @@ import numpy as np
 from planner.errors import InvalidObservationError
 from planner.memo import cached_property
 from planner.models.heights import check_height, probing_heights
+from planner.models.round import round_within
 from planner.models.simplify import simplify_models, widened
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.class_join import join_classes
@@ -65,12 +66,16 @@ class Localization:
     """How far a session is from `localized` (DESIGN §2): the number of equivalence
     `classes` left, the `bound` of the most probable class (None without a
     hypothesis), the required `accuracy`, and what is `missing`: ``one_class``
-    while several classes are left, ``accuracy`` while the bound exceeds it."""
+    while several classes are left, ``accuracy`` while the bound exceeds it.
+    `rotation_free` when the class' outline is round (:mod:`planner.models.round`):
+    its rotation cannot be measured and need not be, the bound's rotation is then
+    pi and the accuracy asks for the translation only."""
 
     classes: int
     bound: ErrorBound | None
     accuracy: Accuracy
     missing: tuple[str, ...]
+    rotation_free: bool = False
 
 
 @dataclass(frozen=True, eq=False)
@@ -352,15 +357,23 @@ class Session:
         # the members lie within tau/2 of the leader's outline (tau in a joined class):
         # the class bound is the widest member's, its outline disk widened by as much
         half = self.symmetry_tolerance / (1 if best in self.joined_classes else 2)
+        # a round outline's rotation is free: every rotation is one class
+        free = all(self._round_poses[h.object][h.stable_pose] for h in members)
         bound = ErrorBound(
             max(h.error_bound.translation for h in members) + half,
-            max(h.error_bound.rotation for h in members),
+            math.pi if free else max(h.error_bound.rotation for h in members),
             max(h.error_bound.eps_t for h in members) + 2 * half,
         )
         missing = (() if classes == 1 else ("one_class",)) + (
-            () if self.accuracy.admits(bound) else ("accuracy",)
+            () if self.accuracy.admits(bound, rotation_free=free) else ("accuracy",)
         )
-        return Localization(classes, bound, self.accuracy, missing)
+        return Localization(classes, bound, self.accuracy, missing, free)
+
+    @cached_property
+    def _round_poses(self) -> dict[str, list[bool]]:
+        """Per object, whether each stable pose is round within the symmetry tolerance."""
+        tau = self.symmetry_tolerance
+        return {m.name: [round_within(p, tau) for p in m.stable_poses] for m in self.models}
 
     def posed_outline(self, hypothesis: Hypothesis) -> np.ndarray:
         """World coordinates of a hypothesis' outline."""

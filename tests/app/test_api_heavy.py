@@ -145,6 +145,19 @@ def test_round_outlines_are_answered_or_refused_by_their_limit(served):
     assert refused.status_code == 422 and "outline" in refused.json()["errors"][0]["field"]
 
 
+def test_a_disc_of_2000_vertices_ends_one_class_its_rotation_free(served):
+    client, _ = served
+    right = hit(40, (200.0, 0.0), (-1.0, 0.0))
+    right["contact"] = {"point": [40.0, 0.0], "normal": [1.0, 0.0]}
+    r = session_with(client, [{"name": "g2000", "outline": gon(2000)}], [hit(40), right])
+    assert [x.status_code for x in r] == [201, 201, 201]
+    state = r[-1].json()
+    loc = state["localization"]
+    assert state["status"] == "localized" and state["class_count"] == 1
+    assert loc["rotation_free"] is True and loc["bound"]["rotation"] == pytest.approx(math.pi)
+    assert loc["bound"]["translation"] <= state["accuracy"]["translation"]
+
+
 def test_a_maximal_ring_with_the_most_holes_is_answered(served):
     client, _ = served
     holes = [gon(100, 3, (-45 + 30 * (i % 4), -45 + 30 * (i // 4)))[::-1] for i in range(16)]

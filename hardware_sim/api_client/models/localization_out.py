@@ -9,6 +9,7 @@ from attrs import field as _attrs_field
 from ..types import UNSET, Unset
 
 from ..models.localization_out_missing_item import LocalizationOutMissingItem
+from ..types import UNSET, Unset
 from typing import cast
 
 if TYPE_CHECKING:
@@ -33,11 +34,14 @@ class LocalizationOut:
             classes (int):
             missing (list[LocalizationOutMissingItem]): empty when localized; one_class while several classes are left,
                 accuracy while the bound exceeds the session's accuracy
+            rotation_free (bool | Unset): true when the class' outline is round (a disc): every rotation is one class, the
+                bound's rotation is pi and the accuracy asks for the translation only Default: False.
      """
 
     bound: ErrorBoundOut | None
     classes: int
     missing: list[LocalizationOutMissingItem]
+    rotation_free: bool | Unset = False
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
 
@@ -61,6 +65,8 @@ class LocalizationOut:
 
 
 
+        rotation_free = self.rotation_free
+
 
         field_dict: dict[str, Any] = {}
         field_dict.update(self.additional_properties)
@@ -69,6 +75,8 @@ class LocalizationOut:
             "classes": classes,
             "missing": missing,
         })
+        if rotation_free is not UNSET:
+            field_dict["rotation_free"] = rotation_free
 
         return field_dict
 
@@ -108,10 +116,13 @@ class LocalizationOut:
             missing.append(missing_item)
 
 
+        rotation_free = d.pop("rotation_free", UNSET)
+
         localization_out = cls(
             bound=bound,
             classes=classes,
             missing=missing,
+            rotation_free=rotation_free,
         )
 
 
