@@ -39,11 +39,13 @@ from planner.errors import InvalidModelError, ModelFileError
 from planner.geometry import point_segment_distance, polygon_centroid, signed_area
 from planner.models.congruence import COLLINEAR_TOLERANCE, congruent
 from planner.models.mesh_limits import MeshLimits
+from planner.models.near_congruence import nearly_congruent
 from planner.models.outlines import make_stable_pose, with_slices
 from planner.types import ObjectModel, StablePose
 
 __all__ = [
     "COLLINEAR_TOLERANCE",
+    "MERGE_SHARE",
     "MESH_FILE_TYPES",
     "MeshLimits",
     "MeshSlice",
@@ -56,6 +58,11 @@ __all__ = [
     "stable_poses",
 ]
 
+
+#: Slices of two stable poses within this share of the slice's size of each other
+#: (after a rotation) are one pose: the facets of one curved face of a tessellated
+#: solid (:mod:`planner.models.near_congruence`).
+MERGE_SHARE = 0.01
 
 #: File types :func:`parse_mesh_bytes` accepts (trimesh's triangle-mesh formats).
 MESH_FILE_TYPES = frozenset({"glb", "gltf", "obj", "off", "ply", "stl"})
@@ -327,8 +334,10 @@ def object_from_mesh(
     first at `height`, the default).
 
     Computes the stable poses and their probabilities, slices each at `height`
-    (mesh units above the table), merges poses whose slices are congruent
-    (probabilities summed), keeps the `max_poses` most probable (all when None)
+    (mesh units above the table), merges poses whose slices are congruent, or
+    within `MERGE_SHARE` of the slice's size of it (the facets of one curved face
+    of a tessellated solid; the merged pose then keeps no out-of-plane normals),
+    probabilities summed, keeps the `max_poses` most probable (all when None)
     and renormalizes their probabilities to sum to 1. A pose whose slice falls
     into separate pieces (an L resting on the tips of its arms) has no single
     outline and is left out like a pose beyond `max_poses`; when every pose is
@@ -373,24 +382,33 @@ def object_from_mesh(
         raise split[0]
     upper = {i: [slice_pose(checked, transforms[i], z, pose=i) for z in extra] for i in slices}
 
-    def same(a: int, b: int) -> bool:
+    def same(a: int, b: int) -> str | None:
         # with several heights, poses stay apart (congruent at one height is not at all)
-        return not extra and congruent(slices[a], slices[b])
+        if extra:
+            return None
+        if congruent(slices[a], slices[b]):
+            return "exact"
+        size = float(np.hypot(*slices[a].outline.T).max())
+        return "near" if nearly_congruent(slices[a], slices[b], MERGE_SHARE * size) else None
 
-    # group congruent slices; the first (most probable) of a group represents it
+    # group congruent slices; the first (most probable) of a group represents it;
+    # a group holding tessellation variants keeps no out-of-plane normals (they differ)
     groups: list[list[int]] = []
+    varied: list[bool] = []
     for i in slices:
-        home = next((g for g in groups if same(g[0], i)), None)
+        home = next(((k, how) for k, g in enumerate(groups) if (how := same(g[0], i))), None)
         if home is None:
             groups.append([i])
+            varied.append(False)
         else:
-            home.append(i)
+            groups[home[0]].append(i)
+            varied[home[0]] |= home[1] == "near"
     merged = np.array([probabilities[g].sum() for g in groups])
     order = np.argsort(-merged, kind="stable")[: max_poses or len(groups)]
     # P(pose | kept) = P(pose) / sum of P over the kept poses
     kept = merged[order] / merged[order].sum()
     poses = [
-        _pose(k, slices[groups[g][0]], upper[groups[g][0]], float(p), height, extra)
+        _pose(k, slices[groups[g][0]], upper[groups[g][0]], float(p), height, extra, varied[g])
         for k, (g, p) in enumerate(zip(order, kept, strict=True))
     ]
     return ObjectModel(name=name, stable_poses=tuple(poses))
@@ -403,15 +421,17 @@ def _pose(
     probability: float,
     height: float,
     extra: list[float],
+    varied: bool = False,
 ) -> StablePose:
     """Stable pose `k` of the model: its slice at `height` and, at each of the
     `extra` heights, its `upper` slice in the frame of the first (a model point p
-    is the posed point p + first.offset at every height)."""
+    is the posed point p + first.offset at every height); without out-of-plane
+    normals when it stands for `varied` tessellation variants."""
     pose = make_stable_pose(
         first.outline,
         first.holes,
         min(probability, 1.0),
-        first.normal_z.tolist(),
+        None if varied else first.normal_z.tolist(),
         field=f"stable_poses[{k}].outline",
     )
     if not extra:
