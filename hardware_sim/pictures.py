@@ -4,13 +4,22 @@ from __future__ import annotations
 
 import math
 
+from hardware_sim.world import World
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan
 from planner.recognition.session import Session
 from planner.render import session_picture as draw_session
-from planner.types import Contact, ObjectModel, Observation, SensingPath, SensorBounds, Workspace
+from planner.types import (
+    Contact,
+    ObjectModel,
+    Observation,
+    Pose,
+    SensingPath,
+    SensorBounds,
+    Workspace,
+)
 
-__all__ = ["bump_block_pair", "session_picture"]
+__all__ = ["bump_block_pair", "curved_parts", "session_picture"]
 
 
 def session_picture(
@@ -61,4 +70,20 @@ def bump_block_pair(models: list[ObjectModel]) -> Session:
     ]
     for obs in touches:
         session = session.observe(obs)
+    return session
+
+
+def curved_parts(models: list[ObjectModel]) -> Session:
+    """The curved parts (D shape, stadium, ellipse, cam) with the cam touched exactly
+    twice, from below and from the left, at 1 mm / 3 degrees: what is left of four
+    finely drawn curves after two contacts."""
+    workspace = Workspace((0.0, 0.0), 160.0)
+    cam = next(m for m in models if m.name == "cam")
+    world = World(cam, 0, Pose(10.0, 5.0, math.radians(20.0)), workspace)
+    session = Session(models, SensorBounds(1.0, math.radians(3.0)), workspace)
+    for path in (
+        SensingPath((5.0, -160.0), (0.0, 1.0), 320.0),
+        SensingPath((-160.0, 15.0), (1.0, 0.0), 320.0),
+    ):
+        session = session.observe(world.execute(path)[0])
     return session
