@@ -48,7 +48,7 @@ __all__ = ["plan", "plan_session"]
 #: The share of a plan's work kept for the forecast of its first paths.
 FORECAST_SHARE = 0.25
 #: Smallest share of the expected error disk a refining path must remove.
-_REFINE_GAIN = 0.05
+_REFINE_GAIN = 0.01
 
 
 def plan_session(

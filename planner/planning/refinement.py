@@ -19,6 +19,7 @@ World frame, lengths in the object files' unit, angles in radians.
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 
@@ -33,12 +34,16 @@ from planner.planning.scoring import InformationScores, information_scores
 from planner.planning.survivors import pin_families
 from planner.recognition.consistent import consistent_set_bounds
 from planner.recognition.pose_fit import fit_batch, noise_scales, point_bounds, worst_case_bounds
-from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds
+from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds, StablePose
 
 __all__ = ["Refinement", "refinement", "scores_after"]
 
 #: Rotations sampled by the consistent-set sweep when predicting (as the recognition does).
 _SWEEP_SAMPLES = 25
+#: Turn (radians) at a vertex up to which a hit near it counts for refinement: a
+#: curve drawn with 16 faces per half turn turns 11.25 degrees at each vertex, a
+#: chamfer 45.
+SMOOTH_TURN = math.pi / 8
 #: Most (path, hypothesis) rows bounded in one call (the sweep's memory).
 _MAX_ROWS = 6000
 
@@ -83,6 +88,10 @@ def refinement(
     after = np.broadcast_to(before, (C, len(reps))).copy()
     rotation = np.broadcast_to(posed.rotation[reps], (C, len(reps))).copy()
     sure = outcomes.hit[:, reps] & ~outcomes.uncertain[:, reps]
+    # on a drawn curve every hit lies near a vertex: where the faces there turn
+    # little, the contact is much as predicted whichever face it lands on
+    smooth = _smooth_hits(hypotheses, models, outcomes, reps, max(phi, SMOOTH_TURN))
+    sure |= outcomes.hit[:, reps] & smooth & ~_uncertain_besides_vertices(outcomes, reps)
     if contacts and (eps_d > 0 or phi > 0) and sure.any():
         P0 = np.array([c.point for c in contacts], dtype=float)
         U0 = np.array([c.normal for c in contacts], dtype=float)
@@ -155,6 +164,48 @@ def refinement(
             rotation[rows] = np.minimum(rotation[rows], d_theta)
     weight = posed.class_weight
     return Refinement(before, after, rotation, after @ weight, float(before @ weight))
+
+
+def smooth_faces(stable: StablePose, turn: float) -> np.ndarray:
+    """(F,) over `stable.all_faces`: does the outline turn by at most `turn`
+    (radians) at both ends of the face (a face of a finely drawn curve)?"""
+    out = []
+    for layer in stable.layers:
+        for ring in (layer.outline, *layer.holes):
+            edge = np.roll(ring, -1, axis=0) - ring
+            angle = np.arctan2(edge[:, 1], edge[:, 0])
+            # the turn at vertex k, from face k - 1 to face k
+            at = np.abs((angle - np.roll(angle, 1) + math.pi) % (2 * math.pi) - math.pi)
+            out.append((at <= turn) & (np.roll(at, -1) <= turn))
+    return np.concatenate(out)
+
+
+def _smooth_hits(
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel],
+    outcomes: Outcomes,
+    reps: np.ndarray,
+    turn: float,
+) -> np.ndarray:
+    """(C, K) does path c hit representative k on a face of a smooth run?"""
+    out = np.zeros((outcomes.face.shape[0], len(reps)), dtype=bool)
+    cache: dict[tuple[str, int], np.ndarray] = {}
+    for k, h in enumerate(reps):
+        hyp = hypotheses[int(h)]
+        key = (hyp.object, hyp.stable_pose)
+        if key not in cache:
+            cache[key] = smooth_faces(models[key[0]].stable_poses[key[1]], turn)
+        face = outcomes.face[:, h]
+        ok = face >= 0
+        out[ok, k] = cache[key][face[ok]]
+    return out
+
+
+def _uncertain_besides_vertices(outcomes: Outcomes, reps: np.ndarray) -> np.ndarray:
+    """(C, K) the outcome may differ from the nominal one for a reason other than
+    a vertex near the contact or passed on the way."""
+    o = outcomes
+    return (o.grazing | o.near_miss | o.end_of_path | o.shallow | o.stretch)[:, reps]
 
 
 def scores_after(

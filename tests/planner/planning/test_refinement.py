@@ -188,3 +188,42 @@ def test_opening_search_falls_back_when_the_prior_is_exhausted():
     chord, aim = search_chord({m.name: m for m in BUMP}, WORKSPACE, fan, (200.0, 0.0))
     assert aim == (0.0, 0.0)
     assert math.hypot(*chord.origin) == pytest.approx(WORKSPACE.radius)
+
+
+def _stadium_touched_on_its_sides():
+    """The shared stadium (straight sides 80 long, round ends drawn with short
+    faces) touched on its straight sides and once where a round end meets one:
+    one class, its slide along the sides known only to about 10."""
+    from planner.recognition.session import Session
+    from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
+    from tests.conftest import object_set
+
+    stadium = [m for m in object_set("curved") if m.name == "stadium"]
+    session = Session(stadium, SensorBounds(1.0, math.radians(3)), Workspace((0, 0), 200))
+    a = math.radians(-75)
+    end = (40 + 25 * math.cos(a), 25 * math.sin(a)), (math.cos(a), math.sin(a))
+    for p, n in [((-20, -25), (0, -1)), ((25, -25), (0, -1)), ((0, 25), (0, 1)), end]:
+        p, n = np.array(p, dtype=float), np.array(n, dtype=float)
+        path = SensingPath(tuple(p + 150 * n), tuple(-n), 300.0)
+        session = session.observe(Observation(path, Contact(tuple(p), tuple(n))))
+    return session
+
+
+def test_a_curved_end_is_touched_to_pin_a_slide(monkeypatch):
+    """Every hit on a drawn curve lies near a vertex; where the faces turn little,
+    refinement credits it: the plan touches the round end, where before it found
+    no path and the robot stopped."""
+    from planner.planning import refinement as refine_module
+    from planner.planning.config import StrategyConfig
+    from planner.planning.plan import plan_session
+
+    session = _stadium_touched_on_its_sides()
+    assert session.localization.missing == ("accuracy",)
+    config = StrategyConfig(budget_ms=None)
+    plan = plan_session(session, (200.0, 0.0), config, 0)
+    assert plan.paths and plan.paths[0].family == "refining"
+    assert abs(plan.paths[0].aim[0]) > 35.0  # at a round end, not mid-side
+    # without the credit, the hits on the round end do not count: a weaker path
+    monkeypatch.setattr(refine_module, "SMOOTH_TURN", 0.0)
+    blind = plan_session(session, (200.0, 0.0), config, 0)
+    assert not blind.paths or blind.paths[0].expected_eps_t > plan.paths[0].expected_eps_t + 1.0
