@@ -57,8 +57,10 @@ __all__ = [
 
 #: Share of the sensor's position bound a chord may stray from the faces it stands for.
 POSITION_SHARE = 0.25
-#: Share of the sensor's normal bound a chord may turn from the faces it stands for.
-NORMAL_SHARE = 0.5
+#: Share of the sensor's normal bound a chord may turn from the faces it stands for: a
+#: contact on a curve then fits about three faces (four at half the bound), which keeps
+#: the interpretations of a finely drawn curve from multiplying touch after touch.
+NORMAL_SHARE = 1.0
 #: Below pi/4, the bound of any sensor's normal error, widened or not.
 MAX_NORMAL = 0.99 * math.pi / 4
 #: Out-of-plane normals this close are one (faces of one mesh facet).

@@ -158,6 +158,53 @@ def test_a_disc_of_2000_vertices_ends_one_class_its_rotation_free(served):
     assert loc["bound"]["translation"] <= state["accuracy"]["translation"]
 
 
+def _ellipse_hit(path: dict, a: float, b: float) -> dict:
+    """The observation of `path` on the ellipse x^2/a^2 + y^2/b^2 = 1: the first
+    crossing with the exact normal, or a miss."""
+    (ox, oy), (dx, dy), length = path["origin"], path["direction"], path["length"]
+    # ((ox + s dx)/a)^2 + ((oy + s dy)/b)^2 = 1, the smaller root
+    qa, qb = (dx / a) ** 2 + (dy / b) ** 2, 2 * (ox * dx / a**2 + oy * dy / b**2)
+    qc = (ox / a) ** 2 + (oy / b) ** 2 - 1
+    disc = qb * qb - 4 * qa * qc
+    body = {"origin": [ox, oy], "direction": [dx, dy], "length": length}
+    s = (-qb - math.sqrt(disc)) / (2 * qa) if disc >= 0 else math.inf
+    if not 0 <= s <= length:
+        return {"path": body, "contact": None}
+    x, y = ox + s * dx, oy + s * dy
+    n = np.array([x / a**2, y / b**2])
+    n /= np.hypot(*n)
+    return {"path": body, "contact": {"point": [x, y], "normal": n.tolist()}}
+
+
+def test_a_5000_vertex_ellipse_is_localized_within_the_limits(served):
+    """Planned paths cast on the true ellipse by the client (the service never
+    sees it): localized on the true pose within ten touches."""
+    client, _ = served
+    t = np.linspace(0, 2 * np.pi, 5000, endpoint=False)
+    ellipse = np.column_stack([60 * np.cos(t), 35 * np.sin(t)]).tolist()
+    (created,) = session_with(client, [{"name": "e5000", "outline": ellipse}])
+    sid, state = created.json()["id"], created.json()
+    for _ in range(10):
+        if state["status"] == "localized":
+            break
+        paths = answered(client.get(f"/v1/sessions/{sid}/plan"), 200).json()["paths"]
+        assert paths, "a session short of localized is always offered a path"
+        r = client.post(
+            f"/v1/sessions/{sid}/observations",
+            json=_ellipse_hit(paths[0], 60.0, 35.0),
+            headers={"If-Match": f'"{state["version"]}"'},
+        )
+        state = answered(r, 201).json()
+    assert state["status"] == "localized", state["localization"]
+    assert state["localization"]["rotation_free"] is False
+    best = state["hypotheses"][0]["pose"]
+    bound = state["localization"]["bound"]
+    assert math.hypot(best["x"], best["y"]) <= bound["translation"]
+    # the ellipse's half turn is the same outline: theta is 0 or pi, within the bound
+    turn = min(abs(best["theta"]), abs(abs(best["theta"]) - math.pi))
+    assert turn <= bound["rotation"]
+
+
 def test_a_maximal_ring_with_the_most_holes_is_answered(served):
     client, _ = served
     holes = [gon(100, 3, (-45 + 30 * (i % 4), -45 + 30 * (i // 4)))[::-1] for i in range(16)]
