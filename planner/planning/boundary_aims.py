@@ -57,7 +57,9 @@ def boundary_aims(
     total, limit = len(fh) * face_samples, 8 * count
     if budget is not None:
         affordable = budget.affordable("aim_pair") / plan.per_point
-        limit = limit if affordable >= limit else max(1, int(affordable))
+        if affordable < 1:  # not even one point's pairs: none examined
+            return np.zeros((0, 2)), np.zeros((0, 2))
+        limit = limit if affordable >= limit else int(affordable)
     if total > limit:
         flat = np.sort(rng.choice(total, size=limit, replace=False))
     else:
