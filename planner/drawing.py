@@ -20,7 +20,14 @@ from planner.types import Contact, Observation, SensingPath, Workspace
 if TYPE_CHECKING:
     from matplotlib.axes import Axes
 
-__all__ = ["GROWN_DRAWN", "STRENGTH_CMAP", "draw_grid", "draw_mii", "draw_overlays"]
+__all__ = [
+    "GROWN_DRAWN",
+    "STRENGTH_CMAP",
+    "draw_grid",
+    "draw_mii",
+    "draw_overlays",
+    "outline_alpha",
+]
 
 _IA_COLOUR = "#7fc97f"
 #: Most hypotheses whose grown outline (ball tip) a session picture draws.
@@ -57,6 +64,18 @@ def _strength_colour(strength: float):
     return colormaps[STRENGTH_CMAP](0.35 + 0.65 * float(np.clip(strength, 0.0, 1.0)))
 
 
+def outline_alpha(weight: float, most: float) -> float:
+    """Opacity of a hypothesis' outline: ``0.2 + 0.8 w(h) / max_g w(g)``, the ratio
+    taken first and held to [0, 1] (0.2 + (0.8 w) / w rounds past 1 for some w,
+    which matplotlib refuses).
+
+    >>> outline_alpha(0.6369616873214543, 0.6369616873214543)
+    1.0
+    """
+    share = weight / most if most > 0 else 1.0
+    return 0.2 + 0.8 * min(max(share, 0.0), 1.0)
+
+
 def draw_mii(ax: Axes, mii: VectorMII, *, prefix: str = "") -> None:
     """Draw the vector MII on `ax` (world frame): outlines coloured per object and
     faded by probability, the IA filled, blocking boundaries shaded by strength."""
@@ -75,8 +94,7 @@ def draw_mii(ax: Axes, mii: VectorMII, *, prefix: str = "") -> None:
                 )
             )
     for i, (h, outline) in enumerate(zip(mii.hypotheses, mii.outlines, strict=True)):
-        # alpha = 0.2 + 0.8 w(h) / max_g w(g)
-        alpha = 0.2 + 0.8 * float(mii.weights[i]) / w_max
+        alpha = outline_alpha(float(mii.weights[i]), w_max)
         ax.add_patch(
             _polygon_patch(
                 outline,

@@ -11,6 +11,8 @@ from functools import cache
 from pathlib import Path
 
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from planner.errors import PlanningNotPossibleError
 from planner.image.grid import build_grid
@@ -218,3 +220,14 @@ def test_many_faces_draw_the_most_probable_hypotheses_and_say_so():
     assert f"the {len(drawn)} most probable of {len(hyps)} hypotheses".encode() in svg
     assert f'id="outline-{len(drawn) - 1}"'.encode() in svg
     assert f'id="outline-{len(drawn)}"'.encode() not in svg
+
+
+@settings(max_examples=200, deadline=None, derandomize=True)
+@given(st.floats(1e-300, 1.0), st.floats(0.0, 1.0))
+def test_an_outline_is_never_more_opaque_than_one(most, share):
+    """matplotlib refuses an alpha past 1: 0.2 + (0.8 w) / w rounds to
+    1.0000000000000002 for some w (a session picture answered 500 for it)."""
+    from planner.drawing import outline_alpha
+
+    assert 0.2 <= outline_alpha(most * share, most) <= 1.0
+    assert outline_alpha(0.6369616873214543, 0.6369616873214543) == 1.0
