@@ -23,6 +23,7 @@ __all__ = [
     "rotation_matrix",
     "segment_segment_distance",
     "signed_area",
+    "vertex_turns",
     "wrap_angle",
 ]
 
@@ -39,6 +40,19 @@ SHARE_SLACK = 1e-9
 def wrap_angle(angle: np.ndarray | float) -> np.ndarray:
     """Wrap angles (radians) into [-pi, pi)."""
     return (np.asarray(angle) + np.pi) % (2 * np.pi) - np.pi
+
+
+def vertex_turns(ring: np.ndarray) -> np.ndarray:
+    """(N,) how far (radians, >= 0) a closed ring (N, 2) turns at each vertex: the
+    angle from the direction of face k - 1 to that of face k (face k runs from
+    vertex k to k + 1).
+
+    >>> vertex_turns(np.array([[0.0, 0], [1, 0], [1, 1], [0, 1]])).round(6).tolist()
+    [1.570796, 1.570796, 1.570796, 1.570796]
+    """
+    edge = np.roll(ring, -1, axis=0) - ring
+    heading = np.arctan2(edge[:, 1], edge[:, 0])
+    return np.abs(wrap_angle(heading - np.roll(heading, 1)))
 
 
 def rotation_matrix(theta: float) -> np.ndarray:

@@ -41,6 +41,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InvalidModelError
+from planner.geometry import vertex_turns
 from planner.models.outlines import make_stable_pose, with_slices
 from planner.types import ObjectModel, SensorBounds, StablePose
 
@@ -128,8 +129,7 @@ def simplify_ring(
     n = len(ring)
     edge = np.roll(ring, -1, axis=0) - ring
     phi = np.arctan2(edge[:, 1], edge[:, 0])
-    turn = np.abs(_wrapped(phi - np.roll(phi, 1)))
-    start = int(np.argmax(turn))
+    start = int(np.argmax(vertex_turns(ring)))
     order = (np.arange(n) + start) % n
     ring, phi = ring[order], phi[order]
     nz = None if normal_z is None else np.asarray(normal_z)[order]

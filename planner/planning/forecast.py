@@ -78,7 +78,7 @@ def forecast_distinguishing(
     weight = np.bincount(cls, weights=[h.probability for h in hypotheses])
     # hypotheses come most probable first: each class' first row is its best member
     _, first = np.unique(cls, return_index=True)
-    total = 0.0
+    total, size = 0.0, update_size(session)
     for k, row in zip(cls[first], first, strict=True):
         if budget.exhausted():
             return None
@@ -86,7 +86,7 @@ def forecast_distinguishing(
         if out.hit[0, row]:
             contact = Contact(tuple(out.point[0, row]), tuple(out.normal[0, row]))
         after = session.observe(Observation(path, contact)).hypotheses
-        budget.spend_updates(1, update_size(session))
+        budget.spend_updates(1, size)
         if len({h.equivalence_class for h in after}) == 1:
             total += float(weight[k])
     return min(total / float(weight.sum()), 1.0)
@@ -167,11 +167,12 @@ def recognition_ranking(
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
     best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
     rows, p_dm, expected = [], [], []
+    size = update_size(session)
     for c in shortlist:
         if rows and budget.exhausted():
             break
         left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
-        budget.spend_updates(len(best), update_size(session))
+        budget.spend_updates(len(best), size)
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))

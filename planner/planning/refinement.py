@@ -25,6 +25,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.geometry import vertex_turns
 from planner.planning.bitsets import SurvivorTable
 from planner.planning.candidates import Candidates
 from planner.planning.confusability import class_bits
@@ -172,10 +173,7 @@ def smooth_faces(stable: StablePose, turn: float) -> np.ndarray:
     out = []
     for layer in stable.layers:
         for ring in (layer.outline, *layer.holes):
-            edge = np.roll(ring, -1, axis=0) - ring
-            angle = np.arctan2(edge[:, 1], edge[:, 0])
-            # the turn at vertex k, from face k - 1 to face k
-            at = np.abs((angle - np.roll(angle, 1) + math.pi) % (2 * math.pi) - math.pi)
+            at = vertex_turns(ring)  # face k runs from vertex k to k + 1
             out.append((at <= turn) & (np.roll(at, -1) <= turn))
     return np.concatenate(out)
 

@@ -71,11 +71,13 @@ def join_classes(
     local = np.arange(n) - offsets[group]
     support = np.concatenate([r.support for r in rings])
     points = np.array([r.points.shape[1] for r in rings])[group]
-    members = [np.flatnonzero(label == c) for c in range(count)]
-    # the leader of a class: its first member in `order`
+    # the members of each class in `order` (one sort, not a pass per class): the
+    # first is its leader
     place = np.empty(n, dtype=np.int64)
     place[np.asarray(order, dtype=np.int64)] = np.arange(n)
-    leaders = np.array([m[np.argmin(place[m])] for m in members])
+    by_class = np.lexsort((place, label))
+    members = np.split(by_class, np.searchsorted(label[by_class], np.arange(1, count)))
+    leaders = np.array([m[0] for m in members])
     tree = cKDTree(support[leaders])
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
