@@ -14,8 +14,10 @@ World frame, lengths in the object files' unit, angles in radians.
 from __future__ import annotations
 
 import functools
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, rotation_matrices, wrap_angle
@@ -134,15 +136,16 @@ def _sweep(
     vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, width)
     bounded &= ~empty_range
     ok &= ~empty_range[:, None, None]
-    # displacement of each model point: R' v + t' - (R v + t)
-    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
+    # displacement of each model point: R' v + t' - (R v + t), largest over the vertices
+    model_points = np.ascontiguousarray(model_points, dtype=float)
     fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
-    posed = np.einsum("knij,pj->knpi", R, model_points)  # (K, N, P, 2)
-    vert = np.stack([vx, vy], axis=-1)  # (K, N, V, 2) candidate translations t'
-    disp = vert[:, :, :, None, :] + posed[:, :, None] - fit_pts[:, None, None]
-    norm = np.where(ok[..., None], np.linalg.norm(disp, axis=-1), -np.inf)
-    radius = np.hypot(*np.asarray(model_points, dtype=float).T)  # (P,) |v|
-    moved = norm.max(axis=(1, 2)) + radius[None] * delta[:, None] / 2  # (K, P)
+    norm = np.full((len(theta), len(model_points)), -np.inf)
+    _largest_moves(
+        np.ascontiguousarray(vx), np.ascontiguousarray(vy), np.ascontiguousarray(ok),
+        np.ascontiguousarray(theta[:, None] + d_theta), model_points, fit_pts, norm,
+    )  # fmt: skip
+    radius = np.hypot(*model_points.T)  # (P,) |v|
+    moved = norm + radius[None] * delta[:, None] / 2  # (K, P)
     feasible = ok.any(axis=2)  # (K, N)
     ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
     dth = ang + delta / 2
@@ -151,6 +154,27 @@ def _sweep(
     moved[~some | unknown] = np.inf
     dth[~some | unknown] = np.inf
     return moved, dth, some | unknown
+
+
+@numba.njit(cache=True, nogil=True)
+def _largest_moves(vx, vy, ok, angle, model_points, fit_pts, out):  # type: ignore[no-untyped-def]
+    """out[k, p] = the largest ``|R(angle[k, n]) v_p + (vx, vy)[k, n, i] - fit_pts[k, p]|``
+    over the rotations n and the polygon vertices i that are `ok` (left as it is
+    where none is): one pass, without the (K, N, V, P) array of displacements."""
+    K, N, V = vx.shape
+    for k in range(K):
+        for n in range(N):
+            c, s = math.cos(angle[k, n]), math.sin(angle[k, n])
+            for i in range(V):
+                if not ok[k, n, i]:
+                    continue
+                for p in range(model_points.shape[0]):
+                    mx, my = model_points[p, 0], model_points[p, 1]
+                    dx = c * mx - s * my + vx[k, n, i] - fit_pts[k, p, 0]
+                    dy = s * mx + c * my + vy[k, n, i] - fit_pts[k, p, 1]
+                    d = math.sqrt(dx * dx + dy * dy)
+                    if d > out[k, p]:
+                        out[k, p] = d
 
 
 def consistent_volume(

@@ -39,34 +39,28 @@ all of them (a tree over forty-odd keys is slow); when there are few, every
 pair is decided in one pass before the leaders take their classes, otherwise
 (a round part's rotations) each leader measures only what is left.
 
-Each candidate pair is then decided without measuring every point against every
-face: the points of one outline, moved into the other's model frame, query one
-k-d tree of points spaced at most h along that model's faces (built once per
-stable pose). The nearest tree point is at most h/2 farther than the nearest
-face point, so a point within tau/2 of a tree point passes, one farther than
-tau/2 + h/2 fails its pair, and only the points in between are measured
-exactly against the faces: the same answer as the exact distance, at a cost
-that grows with the points, not with points x faces (a round outline drawn
-with hundreds of faces, whose rotations are all near one another).
+Each candidate pair is then measured only as far as its answer needs, by a
+compiled early-break scan whose cost grows with the points and the faces, not
+with their product (:mod:`planner.recognition.outline_kernel`).
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
 from scipy.spatial import cKDTree
 
 from planner.geometry import rotation_matrices
+from planner.recognition.outline_kernel import pair_outline_distances
 from planner.types import StablePose
 
 __all__ = [
     "BRUTE_FORCE_FACES",
     "CHUNK_ELEMENTS",
-    "MAX_TREE_POINTS",
     "PAIR_BATCH",
     "SUPPORT_DIRECTIONS",
     "SYMMETRY_FLOOR",
@@ -81,18 +75,15 @@ __all__ = [
 #: Smallest symmetry tolerance, as a share of the scene's scale: exact sensing
 #: still leaves rounding between the rotations of a symmetric outline.
 SYMMETRY_FLOOR = 1e-6
-#: The most point x face pairs one pass of the outline distance holds at once.
+#: The most key values one pass of the candidate-pair screen holds at once.
 CHUNK_ELEMENTS = 1_000_000
-#: Outlines with at most this many faces are compared point by face, without a tree.
+#: Outlines with at most this many faces have few close rotations: their candidate
+#: pairs are decided in one batch (see PAIR_BATCH).
 BRUTE_FORCE_FACES = 64
-#: The most points one stable pose's k-d tree holds along its faces.
-MAX_TREE_POINTS = 20_000
 #: The most points measured inside each face, besides its ends.
 EDGE_SAMPLES = 7
 #: The least spacing of those points, as a share of the symmetry tolerance.
 SAMPLE_SPACING = 0.25
-#: Points of an outline checked first against the other's tree, before all of them.
-SCREEN_POINTS = 64
 #: Probe points whose distances to each posed outline also find candidate pairs:
 #: a PROBE_GRID x PROBE_GRID grid over the most probable outline's box, and PROBES
 #: points along its boundary.
@@ -133,7 +124,6 @@ class PosedRings:
     model_starts: np.ndarray
     model_ends: np.ndarray
     gap: float
-    _trees: dict[float, tuple[cKDTree, float]] = field(default_factory=dict, repr=False)
 
     @classmethod
     def of(
@@ -172,21 +162,6 @@ class PosedRings:
         R = rotation_matrices(self.theta[rows])
         return np.einsum("mji,mpj->mpi", R, points - self.t[rows, None, :])
 
-    def tree(self, spacing: float) -> tuple[cKDTree, float]:
-        """A k-d tree of points along the model's faces at most `h` apart (h: the
-        spacing asked for, or wider so that the tree holds at most
-        :data:`MAX_TREE_POINTS`), and h."""
-        known = self._trees.get(spacing)
-        if known is None:
-            e = self.model_ends - self.model_starts
-            length = np.hypot(e[:, 0], e[:, 1])
-            h = max(spacing, float(length.sum()) / MAX_TREE_POINTS, 1e-300)
-            steps = np.maximum(1, np.ceil(length / h)).astype(np.int64)
-            pts = _along(self.model_starts, self.model_ends, steps, ends=True)
-            known = (cKDTree(pts), float((length / steps).max(initial=0.0)))
-            self._trees[spacing] = known
-        return known
-
 
 def _along(a: np.ndarray, b: np.ndarray, steps: np.ndarray, *, ends: bool) -> np.ndarray:
     """Points splitting each face a[f] -> b[f] (F, 2 each) into steps[f] equal steps,
@@ -198,25 +173,6 @@ def _along(a: np.ndarray, b: np.ndarray, steps: np.ndarray, *, ends: bool) -> np
     return a[face] + share[:, None] * (b - a)[face]
 
 
-def _to_faces(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """(M,) largest distance from each of M point sets (M, P, 2) to its face set
-    (M, F, 2 each): ``max_p min_f |p - segment f|``."""
-    return _nearest_face(points, starts, ends).max(axis=1)
-
-
-def _nearest_face(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """(M, P) distance from each point of M point sets (M, P, 2) to the nearest face
-    of its face set (M, F, 2 each)."""
-    p = points[:, :, None, :]
-    a, b = starts[:, None, :, :], ends[:, None, :, :]
-    e = b - a
-    sq = np.maximum(np.einsum("...i,...i", e, e), 1e-300)
-    # closest point a + u (b - a), u = clip((p - a).(b - a) / |b - a|^2, 0, 1)
-    u = np.clip(np.einsum("...i,...i", p - a, e) / sq, 0.0, 1.0)
-    gap = p - (a + u[..., None] * e)
-    return np.sqrt(np.einsum("...i,...i", gap, gap).min(axis=2))
-
-
 def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> np.ndarray:
     """Distance of hypothesis `i` of `a` to each hypothesis `rows` of `b`: the larger
     of the two directed boundary-to-face distances between their posed outlines."""
@@ -226,59 +182,11 @@ def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> 
 
 def pair_distances(a: PosedRings, ia: np.ndarray, b: PosedRings, ib: np.ndarray) -> np.ndarray:
     """(M,) :func:`outline_distance` of each pair: hypothesis ia[m] of `a` and ib[m] of `b`."""
-    ia, ib = np.asarray(ia, dtype=np.int64), np.asarray(ib, dtype=np.int64)
-    # pairs in chunks of at most CHUNK_ELEMENTS point x face pairs: a round outline has
-    # hundreds of faces, and all its rotations are near one another
-    cells = a.points.shape[1] * b.starts.shape[1] + b.points.shape[1] * a.starts.shape[1]
-    step = max(1, CHUNK_ELEMENTS // max(1, cells))
-    out = np.zeros(len(ia))
-    for lo in range(0, len(ia), step):
-        pa, pb = ia[lo : lo + step], ib[lo : lo + step]
-        there = _to_faces(a.points[pa], b.starts[pb], b.ends[pb])
-        back = _to_faces(b.points[pb], a.starts[pa], a.ends[pa])
-        out[lo : lo + step] = np.maximum(there, back)
-    return out
-
-
-def _point_faces(q: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
-    """(k,) distance from each point q (k, 2) to the nearest of the faces (F, 2 each),
-    in chunks of at most CHUNK_ELEMENTS point x face pairs."""
-    out = np.zeros(len(q))
-    step = max(1, CHUNK_ELEMENTS // max(1, len(starts)))
-    for lo in range(0, len(q), step):
-        part = q[lo : lo + step, None, :]  # each point a set of one
-        shape = (len(part), *starts.shape)
-        out[lo : lo + step] = _to_faces(
-            part, np.broadcast_to(starts, shape), np.broadcast_to(ends, shape)
-        )
-    return out
-
-
-def _all_within(
-    points: np.ndarray, target: PosedRings, rows: np.ndarray, limit: float
-) -> np.ndarray:
-    """(M,) bool: does every point of points[m] (M, P, 2, world) lie within `limit`
-    of the faces of target hypothesis rows[m]? Decided by the target's k-d tree,
-    exactly measured only for points within h/2 of the threshold."""
-    if not len(rows):
-        return np.zeros(0, dtype=bool)
-    tree, h = target.tree(limit / 2)
-    q = target.to_model(points, rows)
-    d, _ = tree.query(q.reshape(-1, 2), distance_upper_bound=limit + h / 2 + 1e-12)
-    d = d.reshape(q.shape[:2])
-    ok = np.all(d <= limit + h / 2 + 1e-12, axis=1)  # a point farther fails its pair
-    unsure = (d > limit) & ok[:, None]
-    m, k = np.nonzero(unsure)
-    if len(m):
-        exact = _point_faces(q[m, k], target.model_starts, target.model_ends)
-        failed = np.unique(m[exact > limit])
-        ok[failed] = False
-    return ok
+    return pair_outline_distances(a.points, a.starts, a.ends, ia, b.points, b.starts, b.ends, ib)
 
 
 def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float) -> np.ndarray:
-    """(len(rows),) bool: ``outline_distance(a, i, b, rows) <= limit``, the same
-    answer, found through the k-d trees (see the module's note)."""
+    """(len(rows),) bool: ``outline_distance(a, i, b, rows) <= limit``."""
     rows = np.asarray(rows, dtype=np.int64)
     return pairs_within(a, np.full(len(rows), i, np.int64), b, rows, limit)
 
@@ -286,32 +194,14 @@ def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float)
 def pairs_within(
     a: PosedRings, ia: np.ndarray, b: PosedRings, ib: np.ndarray, limit: float
 ) -> np.ndarray:
-    """(M,) bool: ``pair_distances(a, ia, b, ib) <= limit``, through the k-d trees."""
-    ia, ib = np.asarray(ia, dtype=np.int64), np.asarray(ib, dtype=np.int64)
-    out = np.zeros(len(ia), dtype=bool)
+    """(M,) bool: ``pair_distances(a, ia, b, ib) <= limit``, each pair measured only
+    as far as the answer needs (:mod:`planner.recognition.outline_kernel`)."""
     if not math.isfinite(limit) or limit < 0:
-        return out if limit < 0 else np.ones(len(ia), dtype=bool)
-    faces = max(a.starts.shape[1], b.starts.shape[1])
-    if faces <= BRUTE_FORCE_FACES or b.tree(limit / 2)[1] > limit or a.tree(limit / 2)[1] > limit:
-        # few faces: measuring every point against every face is cheaper than a tree;
-        # a tree coarser than the threshold would leave nearly every point to measure
-        return pair_distances(a, ia, b, ib) <= limit
-    # a spread few of each outline's points first: a pair one of them fails is decided
-    few_a, few_b = _spread(a.points.shape[1]), _spread(b.points.shape[1])
-    step = max(1, CHUNK_ELEMENTS // max(1, a.points.shape[1] + b.points.shape[1]))
-    for lo in range(0, len(ia), step):
-        pa, pb = ia[lo : lo + step], ib[lo : lo + step]
-        ok = _all_within(a.points[pa[:, None], few_a], b, pb, limit)
-        ok[ok] = _all_within(b.points[pb[ok][:, None], few_b], a, pa[ok], limit)
-        ok[ok] = _all_within(a.points[pa[ok]], b, pb[ok], limit)
-        ok[ok] = _all_within(b.points[pb[ok]], a, pa[ok], limit)
-        out[lo : lo + step] = ok
-    return out
-
-
-def _spread(count: int) -> np.ndarray:
-    """Indices of at most SCREEN_POINTS of `count` points, spread evenly."""
-    return np.unique(np.linspace(0, count - 1, min(SCREEN_POINTS, count)).astype(np.int64))
+        return np.full(len(ia), limit >= 0, dtype=bool)
+    found = pair_outline_distances(
+        a.points, a.starts, a.ends, ia, b.points, b.starts, b.ends, ib, limit
+    )
+    return found <= limit
 
 
 def _probe_distances(rings: Sequence[PosedRings], probes: np.ndarray) -> np.ndarray:

@@ -9,7 +9,6 @@ the true outline lies within the reported bound.
 from __future__ import annotations
 
 import math
-from unittest import mock
 
 import numpy as np
 import pytest
@@ -138,24 +137,47 @@ def test_every_boundary_point_lies_near_a_measured_one(seed, n, spacing):
     assert gaps.max() <= max(spacing, full.gap) / 2 + 1e-9
 
 
+def brute_force_distance(rings: PosedRings, i: int, rows: np.ndarray) -> np.ndarray:
+    """The outline distance by its definition: every point against every face,
+    both ways (the law the compiled early-break scan must keep)."""
+
+    def directed(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> float:
+        p, a, e = points[:, None, :], starts[None], ends[None] - starts[None]
+        sq = np.maximum(np.einsum("...i,...i", e, e), 1e-300)
+        u = np.clip(np.einsum("...i,...i", p - a, e) / sq, 0.0, 1.0)
+        gap = p - (a + u[..., None] * e)
+        return float(np.sqrt(np.einsum("...i,...i", gap, gap).min(axis=1)).max())
+
+    return np.array(
+        [
+            max(
+                directed(rings.points[i], rings.starts[j], rings.ends[j]),
+                directed(rings.points[j], rings.starts[i], rings.ends[i]),
+            )
+            for j in rows
+        ]
+    )
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2**16), st.floats(0.02, 3.0), st.sampled_from([3, 5, 48, 200]))
 def test_within_answers_as_the_exact_distance(seed, scale, n):
-    # the k-d tree decides most points; the answer must equal the exact distance's
+    # the scan breaks early and starts where the last point ended; the distance and
+    # every threshold's answer must equal measuring every point against every face
     rng = np.random.default_rng(seed)
     k = np.arange(n)
     radius = 30 * (1 + 0.3 * rng.random(n)) if n < 48 else 30 * np.ones(n)
     ring = np.column_stack([radius * np.cos(2 * np.pi * k / n), radius * np.sin(2 * np.pi * k / n)])
     stable = object_from_dict({"name": "p", "outline": ring.tolist()}).stable_poses[0]
     theta = rng.normal(0, 0.05 * scale, 12)
+    theta[-1] += np.pi / 2  # a far turn: its nearest faces lie away from the first tried
     t = rng.normal(0, scale, (12, 2))
     rings = PosedRings.of(stable, theta, t)
     exact = outline_distance(rings, 0, rings, np.arange(12))
-    # at the threshold itself the two frames round apart; a hair either side they agree
-    near = (exact[3] * (1 + 1e-9), exact[3] * (1 - 1e-9))
+    np.testing.assert_array_equal(exact, brute_force_distance(rings, 0, np.arange(12)))
+    near = (exact[3] * (1 + 1e-9), exact[3] * (1 - 1e-9), exact[3])
     for limit in (*np.quantile(exact, [0.2, 0.5, 0.8]), *near, 0.0):
-        with mock.patch("planner.recognition.equivalence.BRUTE_FORCE_FACES", 0):
-            got = within(rings, 0, rings, np.arange(12), float(limit))
+        got = within(rings, 0, rings, np.arange(12), float(limit))
         np.testing.assert_array_equal(got, exact <= limit)
 
 
