@@ -257,7 +257,7 @@ def _doubts(
     end_of_path = hit & (dist > length - along)
     facing_away = dx * adj_x + dy * adj_y > -graze_sin
     shallow = shallow_hits(fc, t, dist, hit, f, rows, dx, dy, cos_in, length)
-    stretch = thin_stretch(fc, origins, t, dist, hit, vertex, face_len, rows, dx, dy)
+    stretch = thin_stretch(fc, origins, t, dist, hit, vertex, face_len, f, dx, dy)
     slip = (vertex & facing_away) | grazing | end_of_path | shallow
     slip_hit, slip_dist, slip_angle = slip_past(fc, t, slip, end_of_path, hits.px, hits.py, dx, dy)
     return _Doubts(

@@ -10,8 +10,10 @@ files' unit, angles in radians.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
@@ -84,11 +86,11 @@ def thin_stretch(
     hit: np.ndarray,
     vertex: np.ndarray,
     face_len: np.ndarray,
-    rows: np.ndarray,
+    f: np.ndarray,
     dx: np.ndarray,
     dy: np.ndarray,
 ) -> np.ndarray:
-    """(c, H): how far past the hit the path stays within `geometric` of the
+    """(c, H): how far past the hit (on face `f`) the path stays within `geometric` of the
     outline, for hits on short faces (under four vertex zones) or near a vertex,
     where thin features live; 0 elsewhere.
 
@@ -100,7 +102,7 @@ def thin_stretch(
     ends there, at most `_STRETCH_SAMPLES` steps on.
     """
     out = np.zeros(hit.shape)
-    c, h = np.nonzero(hit & (vertex | (face_len < 4 * fc.vertex_tol[rows])))
+    c, h = np.nonzero(hit & (vertex | (face_len < 4 * fc.vertex_tol[None, :])))
     if not len(c):
         return out
     step = fc.vertex_tol[h] / 2
@@ -110,14 +112,49 @@ def thin_stretch(
     s = dist[c, h, None] + k * step[:, None]  # (n, M)
     qx = origins[c, 0, None] + s * dx[c, 0, None]
     qy = origins[c, 1, None] + s * dy[c, 0, None]
-    depth = segment_distance(
-        qx[..., None], qy[..., None], fc.sx[h, None], fc.sy[h, None], fc.ex[h, None], fc.ey[h, None]
-    )
-    depth = np.where(fc.valid[h, None], depth, np.inf).min(axis=-1)  # (n, M)
-    deep = (depth >= fc.geometric[h, None]) | (s >= t_exit[:, None])
-    first = np.where(deep.any(axis=1), np.argmax(deep, axis=1) + 1, _STRETCH_SAMPLES)
+    first = np.empty(len(c), dtype=np.int64)
+    _first_deep(
+        np.ascontiguousarray(qx), np.ascontiguousarray(qy), s, t_exit, h, f[c, h],
+        fc.sx, fc.sy, fc.ex, fc.ey, np.ascontiguousarray(fc.valid), fc.geometric, first,
+    )  # fmt: skip
     out[c, h] = np.minimum(first * step, t_exit - dist[c, h])
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _first_deep(qx, qy, s, t_exit, h, hint, sx, sy, ex, ey, valid, geometric, first):  # type: ignore[no-untyped-def]
+    """first[i] = 1 + the first sample k of hit i (points qx, qy (n, M) at `s` along
+    the path, on hypothesis h[i]) past the exit or farther than geometric[h[i]] from
+    every valid face; M when none is. A sample is shallow as soon as one face lies
+    within `geometric`, so its scan starts at the face the last one stopped at
+    (first the face hit, `hint`) and goes outward both ways: about one face per
+    shallow sample, all of them for the deep one that ends the stretch."""
+    n, m = qx.shape
+    n_faces = sx.shape[1]
+    for i in range(n):
+        row, near = h[i], hint[i]
+        first[i] = m
+        for k in range(m):
+            if s[i, k] >= t_exit[i]:
+                first[i] = k + 1
+                break
+            shallow = False
+            for j in range(n_faces):
+                step = (j + 1) // 2
+                f = (near + (step if j % 2 == 1 else -step) + n_faces) % n_faces
+                if not valid[row, f]:
+                    continue
+                ux, uy = ex[row, f] - sx[row, f], ey[row, f] - sy[row, f]
+                sq = max(ux * ux + uy * uy, 1e-300)
+                u = ((qx[i, k] - sx[row, f]) * ux + (qy[i, k] - sy[row, f]) * uy) / sq
+                u = min(max(u, 0.0), 1.0)
+                d = math.hypot(qx[i, k] - (sx[row, f] + u * ux), qy[i, k] - (sy[row, f] + u * uy))
+                if d < geometric[row]:
+                    shallow, near = True, f
+                    break
+            if not shallow:
+                first[i] = k + 1
+                break
 
 
 def close_passes(
