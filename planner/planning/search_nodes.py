@@ -35,6 +35,7 @@ from planner.planning.bitsets import (
     undominated,
     unpack_bits,
 )
+from planner.planning.leaf_kernel import one_touch_values
 
 __all__ = ["Node", "SearchSpace"]
 
@@ -202,28 +203,13 @@ class SearchSpace:
         total = w.sum(axis=1, keepdims=True)
         # w(h|T), uniform when T weighs nothing
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
-        # |S_P(h) & T| for every member h and (undominated) path P: (n, M, C)
-        rows = self.leaf_by_class[g]
-        count = popcount(np.bitwise_and(rows, sets[:, None, None, :], out=rows))
-        stay = (count == real.sum(axis=1)[:, None, None]) & real[..., None]
-        settled = count <= 1
+        # a child holding exactly the classes inseparable from h is settled when they
+        # are a clique (a group of one is settled by the count already)
+        size = np.zeros(idx.shape, dtype=np.int64)
+        clique = np.zeros(idx.shape, dtype=bool)
         if self.any_inseparable:
-            # (a group of one is settled by the count already)
             group = self.inseparable[g] & sets[:, None, :]
-            size = popcount(group)
-            pick = np.nonzero(size >= 2)
-            if len(pick[0]):
-                # some path leaves h with exactly its group: settled if that is a clique
-                only = count[pick] == size[pick][:, None]
-                some = np.flatnonzero(only.any(axis=1))
-                clique = self._clique(group[pick][some], g[pick][some])
-                at = (pick[0][some], pick[1][some])
-                settled[at] |= only[some] & clique[:, None]
-        open_ = ~stay & ~settled & real[..., None]
-        w_stay = np.einsum("bmc,bm->bc", stay.astype(float), w)
-        leaf = np.where(open_, self.leaf_value(count), 0.0)
-        w_open = np.einsum("bmc,bm->bc", leaf, w)
-        informative = w_stay < 1 - 1e-12
-        # E_P(T) = (1 + sum_{open children} w(h|T) leaf(child)) / (1 - w_stay)
-        bound = (1.0 + w_open) / np.where(informative, 1.0 - w_stay, 1.0)
-        return np.where(informative, bound, np.inf).min(axis=1)
+            size = popcount(group).astype(np.int64)
+            clique = self._cliques(group, g, size)
+        rows = self.leaf_by_class
+        return one_touch_values(rows, sets, idx, w, size, clique, self.rate)
