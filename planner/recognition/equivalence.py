@@ -51,11 +51,10 @@ from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
-import shapely
 from scipy.spatial import cKDTree
 
 from planner.geometry import rotation_matrices
-from planner.recognition.outline_kernel import pair_outline_distances
+from planner.recognition.outline_kernel import nearest_face_distances, pair_outline_distances
 from planner.types import StablePose
 
 __all__ = [
@@ -207,12 +206,11 @@ def pairs_within(
 def _probe_distances(rings: Sequence[PosedRings], probes: np.ndarray) -> np.ndarray:
     """(N, J) distance from each probe point (J, 2) to each posed outline's faces:
     the probes moved into each hypothesis' model frame, measured against the
-    stable pose's faces in one vectorized pass of shapely."""
+    stable pose's faces."""
     out = []
     for r in rings:
-        faces = shapely.multilinestrings(np.stack([r.model_starts, r.model_ends], axis=1))
         q = r.to_model(np.broadcast_to(probes, (len(r), *probes.shape)), np.arange(len(r)))
-        out.append(shapely.distance(shapely.points(q), faces))
+        out.append(nearest_face_distances(q, r.model_starts, r.model_ends))
     return np.concatenate(out)
 
 

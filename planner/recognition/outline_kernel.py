@@ -26,7 +26,7 @@ import math
 import numba
 import numpy as np
 
-__all__ = ["pair_outline_distances"]
+__all__ = ["nearest_face_distances", "pair_outline_distances"]
 
 
 @numba.njit(cache=True, nogil=True)
@@ -111,4 +111,32 @@ def pair_outline_distances(
             for x in (a_points, a_starts, a_ends, b_points, b_starts, b_ends)
         ]
         _pairs(*arrays[:3], ia, *arrays[3:], ib, floor, stop, out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _nearest(points, starts, ends, out):  # type: ignore[no-untyped-def]
+    for n in range(points.shape[0]):
+        for j in range(points.shape[1]):
+            best = math.inf
+            for f in range(starts.shape[0]):
+                d = _segment_distance(
+                    points[n, j, 0], points[n, j, 1],
+                    starts[f, 0], starts[f, 1], ends[f, 0], ends[f, 1],
+                )  # fmt: skip
+                best = min(best, d)
+            out[n, j] = best
+
+
+def nearest_face_distances(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
+    """(N, J) distance from each point (N, J, 2) to the nearest of the faces (F, 2
+    each); inf without faces."""
+    points = np.ascontiguousarray(points, dtype=np.float64)
+    out = np.empty(points.shape[:2])
+    _nearest(
+        points,
+        np.ascontiguousarray(starts, dtype=np.float64),
+        np.ascontiguousarray(ends, dtype=np.float64),
+        out,
+    )
     return out

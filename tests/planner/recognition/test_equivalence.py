@@ -26,6 +26,7 @@ from planner.recognition.equivalence import (
     outline_distance,
     within,
 )
+from planner.recognition.outline_kernel import nearest_face_distances
 from planner.recognition.session import Session
 from planner.types import Accuracy, ObjectModel, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
@@ -268,3 +269,17 @@ def test_the_candidate_filter_drops_no_pair_that_is_within(seed, n, hole, spread
     family = rng.integers(0, total, total) if hole else np.arange(total)
     got = equivalence_classes(rings, order, family, tau)
     np.testing.assert_array_equal(got, _classes_without_filter(rings, order, family, tau))
+
+
+@settings(max_examples=40, deadline=None)
+@given(st.integers(0, 2**16), st.integers(1, 40))
+def test_probe_distances_are_the_distances_to_the_nearest_face(seed, n_faces):
+    # the compiled probe distances against shapely's, on a random ring's faces
+    rng = np.random.default_rng(seed)
+    starts = rng.normal(0, 20, (n_faces, 2))
+    ends = np.roll(starts, -1, axis=0)
+    points = rng.normal(0, 30, (3, 5, 2))
+    got = nearest_face_distances(points, starts, ends)
+    faces = shapely.multilinestrings(np.stack([starts, ends], axis=1))
+    want = shapely.distance(shapely.points(points), faces)
+    np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
