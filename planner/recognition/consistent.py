@@ -284,47 +284,95 @@ def _polygons(
     K, N = d_theta.shape
     gid, g_normals, g_use = _face_groups(face_normals, face_offsets, use)
     G = g_use.shape[1]
-    pairs = np.array(np.triu_indices(G, 1)).T
-    sides = np.array([[-1.0, -1.0], [-1.0, 1.0], [1.0, -1.0], [1.0, 1.0]])
-    R = rotation_matrices(theta[:, None] + d_theta)  # (K, N, 2, 2)
-    # each contact's posed line at each rotation: n . t = c within the width
-    n_s = np.einsum("knij,ksj->knsi", R, face_normals)
-    c_s = np.einsum("knsi,ksi->kns", n_s, points) - face_offsets[:, None, :]
-    # per face: n . t in [max c - w, min c + w], a slab of centre and half-width
-    idx = (
-        np.broadcast_to(np.arange(K)[:, None, None], c_s.shape),
-        np.broadcast_to(np.arange(N)[None, :, None], c_s.shape),
-        np.broadcast_to(gid[:, None, :], c_s.shape),
-    )
-    c_max = np.full((K, N, G), -np.inf)
-    c_min = np.full((K, N, G), np.inf)
-    used = np.broadcast_to(use[:, None, :], c_s.shape)
-    np.maximum.at(c_max, idx, np.where(used, c_s, -np.inf))
-    np.minimum.at(c_min, idx, np.where(used, c_s, np.inf))
-    w0 = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)[:, None, None]
-    held = g_use[:, None, :]  # a group of unused contacts has no slab
-    c_max, c_min = np.where(held, c_max, 0.0), np.where(held, c_min, 0.0)
-    spread, centre = c_max - c_min, (c_max + c_min) / 2  # (K, N, G)
-    w = w0 - spread / 2  # (K, N, G): < 0 where the face's contacts cannot all be met
-    n = np.einsum("knij,kgj->kngi", R, g_normals)  # (K, N, G, 2)
-    tol = LENGTH_SLACK * (1.0 + np.abs(centre)) + 1e-12
-    met = np.all((w >= -tol) | ~g_use[:, None, :], axis=-1)  # (K, N)
-    w = np.maximum(w, 0.0)
-    i, j = pairs[:, 0], pairs[:, 1]
-    a, b = n[:, :, i], n[:, :, j]
-    det = a[..., 0] * b[..., 1] - a[..., 1] * b[..., 0]
-    good = (np.abs(det) > SHARE_SLACK) & g_use[:, None, i] & g_use[:, None, j]
-    det = np.where(good, det, 1.0)
-    ci = centre[:, :, i, None] + w[:, :, i, None] * sides[:, 0]  # (K, N, Q, 4)
-    cj = centre[:, :, j, None] + w[:, :, j, None] * sides[:, 1]
-    shape = (*det.shape[:2], -1)
-    vx = ((ci * b[..., 1, None] - cj * a[..., 1, None]) / det[..., None]).reshape(shape)
-    vy = ((a[..., 0, None] * cj - b[..., 0, None] * ci) / det[..., None]).reshape(shape)
-    proj = n[..., None, :, 0] * vx[..., None] + n[..., None, :, 1] * vy[..., None]
-    inside = np.abs(proj - centre[:, :, None, :]) <= w[:, :, None, :] + tol[:, :, None, :]
-    ok = np.repeat(good, 4, axis=-1) & np.all(inside | ~g_use[:, None, None, :], axis=-1)
-    ok &= met[..., None]
-    return vx, vy, ok, good.any(axis=(1, 2))
+    V = 4 * (G * (G - 1) // 2)
+    vx, vy = np.zeros((K, N, V)), np.zeros((K, N, V))
+    ok = np.zeros((K, N, V), dtype=bool)
+    bounded = np.zeros(K, dtype=bool)
+    w0 = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)
+    _polygon_vertices(
+        np.ascontiguousarray(points, dtype=float),
+        np.ascontiguousarray(face_normals, dtype=float),
+        np.ascontiguousarray(face_offsets, dtype=float),
+        np.ascontiguousarray(use),
+        gid,
+        g_normals,
+        g_use,
+        np.ascontiguousarray(theta[:, None] + d_theta),
+        np.ascontiguousarray(w0),
+        vx, vy, ok, bounded,
+    )  # fmt: skip
+    return vx, vy, ok, bounded
+
+
+@numba.njit(cache=True, nogil=True)
+def _polygon_vertices(  # type: ignore[no-untyped-def]
+    points, face_normals, face_offsets, use, gid, g_normals, g_use, angle, w0, vx, vy, ok, bounded
+):
+    """:func:`_polygons`, one row and rotation at a time: per face group, the slab
+    n . t in [centre - w, centre + w] (the intersection of its contacts' slabs, w
+    < 0 when they cannot all be met), then the four crossings of the edges of each
+    two non-parallel slabs, `ok` where inside every slab (within the rounding
+    slack). Crossings are laid out pair by pair (i < j), four per pair."""
+    K, N = angle.shape
+    S = use.shape[1]
+    G = g_use.shape[1]
+    centre = np.zeros(G)
+    half = np.zeros(G)
+    tol = np.zeros(G)
+    nx = np.zeros(G)
+    ny = np.zeros(G)
+    c_max = np.zeros(G)
+    c_min = np.zeros(G)
+    for k in range(K):
+        for n in range(N):
+            c, s = math.cos(angle[k, n]), math.sin(angle[k, n])
+            for g in range(G):
+                c_max[g], c_min[g] = -math.inf, math.inf
+            for j in range(S):
+                if not use[k, j]:
+                    continue
+                fx, fy = face_normals[k, j, 0], face_normals[k, j, 1]
+                value = (c * fx - s * fy) * points[k, j, 0] + (s * fx + c * fy) * points[k, j, 1]
+                value -= face_offsets[k, j]
+                g = gid[k, j]
+                c_max[g] = max(c_max[g], value)
+                c_min[g] = min(c_min[g], value)
+            met = True
+            for g in range(G):
+                if not g_use[k, g]:
+                    c_max[g], c_min[g] = 0.0, 0.0
+                centre[g] = (c_max[g] + c_min[g]) / 2
+                half[g] = w0[k] - (c_max[g] - c_min[g]) / 2
+                tol[g] = LENGTH_SLACK * (1.0 + abs(centre[g])) + 1e-12
+                if g_use[k, g] and half[g] < -tol[g]:
+                    met = False
+                half[g] = max(half[g], 0.0)
+                nx[g] = c * g_normals[k, g, 0] - s * g_normals[k, g, 1]
+                ny[g] = s * g_normals[k, g, 0] + c * g_normals[k, g, 1]
+            q = 0
+            for i in range(G):
+                for j in range(i + 1, G):
+                    det = nx[i] * ny[j] - ny[i] * nx[j]
+                    good = abs(det) > SHARE_SLACK and g_use[k, i] and g_use[k, j]
+                    if not good:
+                        det = 1.0
+                    else:
+                        bounded[k] = True
+                    for side in range(4):
+                        ci = centre[i] + half[i] * (-1.0 if side < 2 else 1.0)
+                        cj = centre[j] + half[j] * (-1.0 if side % 2 == 0 else 1.0)
+                        x = (ci * ny[j] - cj * ny[i]) / det
+                        y = (nx[i] * cj - nx[j] * ci) / det
+                        vx[k, n, q], vy[k, n, q] = x, y
+                        inside = good and met
+                        for g in range(G):
+                            if not inside:
+                                break
+                            if g_use[k, g]:
+                                proj = nx[g] * x + ny[g] * y
+                                inside = abs(proj - centre[g]) <= half[g] + tol[g]
+                        ok[k, n, q] = inside
+                        q += 1
 
 
 def _volume(
