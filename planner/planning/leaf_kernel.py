@@ -31,14 +31,46 @@ def _popcount(x):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _values(rows, sets, idx, w, size, clique, rate, out):  # type: ignore[no-untyped-def]
+def _clique(group, near, near_apart):  # type: ignore[no-untyped-def]
+    """Are the classes of `group` (W,) among a class' inseparable neighbours `near`
+    (G,) pairwise inseparable? `near_apart` (G,): G-bit masks of which neighbours
+    are separable from each."""
+    local = np.uint64(0)
+    for q in range(near.shape[0]):
+        nb = near[q]
+        if nb >= 0 and (group[nb // 64] >> np.uint64(nb % 64)) & np.uint64(1):
+            local |= np.uint64(1) << np.uint64(q)
+    for q in range(near.shape[0]):
+        if (local >> np.uint64(q)) & np.uint64(1) and (near_apart[q] & local) != 0:
+            return False
+    return True
+
+
+@numba.njit(cache=True, nogil=True)
+def _values(rows, sets, idx, w, inseparable, near, near_apart, size, clique, rate, out):  # type: ignore[no-untyped-def]
+    """With `near` of shape (K, G) the groups and their cliques are found here, once
+    per member and only where a child's count asks; otherwise `size` and `clique`
+    (n, M) are given (or zero when no classes are inseparable)."""
     n, m_max = idx.shape
     n_paths, n_words = rows.shape[1], rows.shape[2]
+    lazy = near.shape[0] > 0
+    group = np.zeros(n_words, dtype=np.uint64)
     for b in range(n):
         members = 0
         for m in range(m_max):
             if idx[b, m] >= 0:
                 members += 1
+        if lazy:
+            for m in range(m_max):
+                g = idx[b, m]
+                if g < 0:
+                    continue
+                count = 0
+                for k in range(n_words):
+                    count += _popcount(inseparable[g, k] & sets[b, k])
+                size[b, m] = count
+                clique[b, m] = False
+        known = np.zeros(m_max, dtype=np.bool_)
         best = math.inf
         for c in range(n_paths):
             w_stay = 0.0
@@ -52,9 +84,18 @@ def _values(rows, sets, idx, w, size, clique, rate, out):  # type: ignore[no-unt
                     count += _popcount(rows[g, c, k] & sets[b, k])
                 if count == members:
                     w_stay += w[b, m]
-                elif count <= 1 or (clique[b, m] and count == size[b, m]):
+                    continue
+                if count <= 1:
                     continue  # settled
-                elif rate > 0:
+                if count == size[b, m]:
+                    if lazy and not known[m]:
+                        for k in range(n_words):
+                            group[k] = inseparable[g, k] & sets[b, k]
+                        clique[b, m] = _clique(group, near[g], near_apart[g])
+                        known[m] = True
+                    if clique[b, m]:
+                        continue  # settled: exactly its pairwise inseparable group
+                if rate > 0:
                     w_open += w[b, m] * max(1.0, math.log(max(count, 1)) / rate)
                 else:
                     w_open += w[b, m]
@@ -70,22 +111,41 @@ def one_touch_values(
     sets: np.ndarray,
     idx: np.ndarray,
     w: np.ndarray,
-    size: np.ndarray,
-    clique: np.ndarray,
     rate: float | None,
+    *,
+    inseparable: np.ndarray | None = None,
+    near: np.ndarray | None = None,
+    near_apart: np.ndarray | None = None,
+    size: np.ndarray | None = None,
+    clique: np.ndarray | None = None,
 ) -> np.ndarray:
     """(n,) the best one-touch value of each set (n, W) with members idx (n, M) (-1:
     padding) weighing w (n, M): `rows` (K, C, W) the survivor sets of each class
-    along each path; a child ``S_P(h) & T`` is settled when it holds at most one
-    class, or exactly the `size` (n, M) classes inseparable from h when those are a
-    `clique` (n, M); leaves are valued at ``max(1, log(count) / rate)`` (one touch
-    when `rate` is None). inf where no path is informative."""
+    along each path; leaves are valued at ``max(1, log(count) / rate)`` (one touch
+    when `rate` is None). A child ``S_P(h) & T`` is settled when it holds at most
+    one class, or exactly the classes inseparable from h (`inseparable` (K, W))
+    when those are pairwise inseparable: found from each class' inseparable
+    neighbours `near` and `near_apart` (:func:`~planner.planning.bitsets.inseparable_neighbours`),
+    or given per member as the group's `size` and whether it is a `clique` (n, M).
+    inf where no path is informative."""
     out = np.empty(len(sets))
+    n_words = sets.shape[-1]
+    if near is None or near_apart is None or inseparable is None:
+        near = np.zeros((0, 1), dtype=np.int64)
+        near_apart = np.zeros((0, 1), dtype=np.uint64)
+        inseparable = np.zeros((0, n_words), dtype=np.uint64)
+        size = np.zeros(idx.shape, dtype=np.int64) if size is None else size
+        clique = np.zeros(idx.shape, dtype=bool) if clique is None else clique
+    else:
+        size, clique = np.zeros(idx.shape, dtype=np.int64), np.zeros(idx.shape, dtype=bool)
     _values(
         np.ascontiguousarray(rows, dtype=np.uint64),
         np.ascontiguousarray(sets, dtype=np.uint64),
         np.ascontiguousarray(idx, dtype=np.int64),
         np.ascontiguousarray(w, dtype=np.float64),
+        np.ascontiguousarray(inseparable, dtype=np.uint64),
+        np.ascontiguousarray(near, dtype=np.int64),
+        np.ascontiguousarray(near_apart, dtype=np.uint64),
         np.ascontiguousarray(size, dtype=np.int64),
         np.ascontiguousarray(clique, dtype=np.bool_),
         0.0 if rate is None else float(rate),

@@ -205,11 +205,15 @@ class SearchSpace:
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
         # a child holding exactly the classes inseparable from h is settled when they
         # are a clique (a group of one is settled by the count already)
-        size = np.zeros(idx.shape, dtype=np.int64)
-        clique = np.zeros(idx.shape, dtype=bool)
-        if self.any_inseparable:
-            group = self.inseparable[g] & sets[:, None, :]
-            size = popcount(group).astype(np.int64)
-            clique = self._cliques(group, g, size)
         rows = self.leaf_by_class
-        return one_touch_values(rows, sets, idx, w, size, clique, self.rate)
+        if not self.any_inseparable:
+            return one_touch_values(rows, sets, idx, w, self.rate)
+        if self.near is not None and self.near_apart is not None:
+            return one_touch_values(
+                rows, sets, idx, w, self.rate,
+                inseparable=self.inseparable, near=self.near, near_apart=self.near_apart,
+            )  # fmt: skip
+        group = self.inseparable[g] & sets[:, None, :]
+        size = popcount(group).astype(np.int64)
+        clique = self._cliques(group, g, size)
+        return one_touch_values(rows, sets, idx, w, self.rate, size=size, clique=clique)

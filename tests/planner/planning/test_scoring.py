@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import itertools
 import math
+from unittest import mock
 
 import numpy as np
 import pytest
@@ -411,6 +412,26 @@ def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
         found = expected_remaining(table, depth)
         np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
         assert found.exact.all()
+
+
+@settings(max_examples=30, deadline=None)
+@given(st.integers(3, 12), st.integers(1, 6), st.integers(0, 2**31), st.booleans())
+def test_leaf_values_agree_however_the_cliques_are_found(k, n_paths, seed, entropy):
+    # the one-touch leaves find the inseparable groups' cliques from each class'
+    # neighbour list; past 64 neighbours they are given by array passes instead
+    rng = np.random.default_rng(seed)
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.7)
+    conf[:, np.arange(k), np.arange(k)] = True
+    pairs = rng.integers(0, k, (rng.integers(1, 5), 2))
+    conf[:, pairs[:, 0], pairs[:, 1]] = True
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
+    leaf = "entropy" if entropy else "touch"
+    lazy = expected_remaining(table, 2, leaf=leaf).value
+    with mock.patch(
+        "planner.planning.search_nodes.inseparable_neighbours", return_value=(None, None)
+    ):
+        given_cliques = expected_remaining(table, 2, leaf=leaf).value
+    np.testing.assert_array_equal(lazy, given_cliques)
 
 
 @settings(max_examples=40, deadline=None)
