@@ -74,6 +74,7 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
     )
     async with anyio.create_task_group() as tasks:
         tasks.start_soon(_retention, service)
+        tasks.start_soon(_warm_up)
         try:
             yield
         finally:
@@ -81,6 +82,20 @@ async def lifespan(app: FastAPI) -> AsyncIterator[None]:
             app.state.service = None
             await service.run_db(store.close)
         log.info("service stopped")
+
+
+async def _warm_up() -> None:
+    """Load the planner's compiled kernels in the background, so that the first
+    session's answers do not wait for them (the service is ready meanwhile; the
+    warm-up takes no CPU worker's place, so no request queues behind it)."""
+    from planner.warmup import warm_up
+
+    try:
+        seconds = await anyio.to_thread.run_sync(warm_up)
+    except Exception as exc:  # a failed warm-up costs the first request time, no more
+        log.warning("warm-up failed", error=repr(exc))
+    else:
+        log.info("warmed up", seconds=round(seconds, 2))
 
 
 async def _retention(service: SessionService) -> None:
