@@ -26,6 +26,13 @@ def test_bench_json_reports_every_set_and_error_case(capsys):
         assert r["update_p95_ms"] >= r["update_p50_ms"] > 0
 
 
+def test_bench_without_exact_sensing_times_the_error_case_only(capsys):
+    argv = ["bench", "--sets", "symmetric", "--trials", "2", "--no-exact", "--json"]
+    assert main(argv) == 0
+    rows = json.loads(capsys.readouterr().out)["recognition"]
+    assert [(r["position_error"], r["normal_error_deg"]) for r in rows] == [(1.0, 3.0)]
+
+
 def test_bench_planning_reports_plan_times_and_work_after_0_to_3_touches(capsys):
     argv = ["bench", "--sets", "symmetric", "--planning", "--no-recognition", "--json"]
     assert (
