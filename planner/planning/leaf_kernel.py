@@ -31,6 +31,15 @@ def _popcount(x):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
+def _common(a, b):  # type: ignore[no-untyped-def]
+    """How many classes two bitsets (W,) share."""
+    count = 0
+    for k in range(a.shape[0]):
+        count += int(_popcount(a[k] & b[k]))
+    return count
+
+
+@numba.njit(cache=True, nogil=True)
 def _clique(group, near, near_apart):  # type: ignore[no-untyped-def]
     """Are the classes of `group` (W,) among a class' inseparable neighbours `near`
     (G,) pairwise inseparable? `near_apart` (G,): G-bit masks of which neighbours
@@ -65,10 +74,7 @@ def _values(rows, sets, idx, w, inseparable, near, near_apart, size, clique, rat
                 g = idx[b, m]
                 if g < 0:
                     continue
-                count = 0
-                for k in range(n_words):
-                    count += _popcount(inseparable[g, k] & sets[b, k])
-                size[b, m] = count
+                size[b, m] = _common(inseparable[g], sets[b])
                 clique[b, m] = False
         known = np.zeros(m_max, dtype=np.bool_)
         best = math.inf
@@ -79,9 +85,7 @@ def _values(rows, sets, idx, w, inseparable, near, near_apart, size, clique, rat
                 g = idx[b, m]
                 if g < 0:
                     continue
-                count = 0
-                for k in range(n_words):
-                    count += _popcount(rows[g, c, k] & sets[b, k])
+                count = _common(rows[g, c], sets[b])
                 if count == members:
                     w_stay += w[b, m]
                     continue
