@@ -10,11 +10,14 @@ frame, lengths in the object files' unit, angles in radians.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import numba
 import numpy as np
 
+from planner.compiled import c_array
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, wrap_angle
 from planner.planning.bitsets import sorted_count
 from planner.planning.cast_faces import segment_distance
@@ -70,10 +73,15 @@ def boundary_aims(
     pts = start + frac[sample, None] * (posed.end[owner, f] - start)
     normals = posed.normal[owner, f]
     shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
-    q, h, pairs = _blocking_pairs(posed, sensor, pts, owner, normals, plan)
+    if plan.buckets is None:
+        q, h, pairs = _blocking_pairs(posed, sensor, pts, owner, normals, plan)
+        shared[q, posed.cls[h]] = True
+    else:
+        pairs = _bucket_blocking(
+            posed, sensor, pts, owner, normals, plan.face_angle, plan.buckets, shared
+        )
     if budget is not None:
         budget.spend("aim_pair", pairs)
-    shared[q, posed.cls[h]] = True
     strength = np.empty(len(pts))
     chunk = max(1, 1_000_000 // max(1, posed.valid.size))
     for lo in range(0, len(pts), chunk):
@@ -250,3 +258,110 @@ def _bucket_pairs(
     at = np.arange(len(q)) - np.repeat(np.cumsum(count) - count, count)
     face = buckets.order[buckets.first[np.repeat(b, count)] + np.repeat(lo, count) + at]
     return q, face
+
+
+def _bucket_blocking(
+    posed: PosedSet,
+    sensor: SensorBounds,
+    pts: np.ndarray,
+    owner: np.ndarray,
+    normals: np.ndarray,
+    face_angle: np.ndarray,
+    buckets: _Buckets,
+    shared: np.ndarray,
+) -> int:
+    """The blocking classes of every point into `shared` (points, classes), through
+    the buckets (:func:`_bucket_pairs`, then the normal and distance tests of
+    :func:`_pairs_in`) in one compiled pass without the pairs' arrays; returns how
+    many candidate (point, face) pairs were measured."""
+    fh, ff = np.nonzero(posed.valid)
+    start, end = posed.start[fh, ff], posed.end[fh, ff]
+    b = buckets
+    arrays = (
+        c_array(pts, dtype=float),
+        c_array(owner, dtype=np.int64),
+        np.arctan2(normals[:, 1], normals[:, 0]),
+    )
+    table = (
+        float(b.width),
+        int(b.n_buckets),
+        c_array(b.used, np.int64),
+        c_array(b.span, float),
+        c_array(b.order, np.int64),
+        c_array(b.first, np.int64),
+        c_array(b.sorted_low, float),
+    )
+    faces = (c_array(face_angle, float), c_array(fh, np.int64), c_array(start), c_array(end))
+    tolerances = (
+        c_array(posed.rotation, float),
+        c_array(posed.eps_t, float),
+        c_array(posed.cls, dtype=np.int64),
+        2 * sensor.normal_error,
+        2 * sensor.position_error,
+        float(posed.eps_t.max()),
+        2e-9 * posed.scale,
+        LENGTH_SLACK * posed.scale,
+    )
+    return int(_blocking_kernel(*arrays, *table, *faces, *tolerances, shared))
+
+
+@numba.njit(cache=True, nogil=True)
+def _blocking_kernel(  # type: ignore[no-untyped-def]
+    pts,
+    owner,
+    angle,
+    width,
+    n_buckets,
+    used,
+    span,
+    order,
+    first,
+    sorted_low,
+    face_angle,
+    fh,
+    start,
+    end,
+    rotation,
+    eps_t,
+    cls,
+    two_phi,
+    two_eps_d,
+    eps_t_max,
+    reach_slack,
+    dist_slack,
+    shared,
+):
+    measured = 0
+    for q in range(pts.shape[0]):
+        g = owner[q]
+        mine = math.floor((angle[q] + math.pi) / width)
+        reach = two_eps_d + (eps_t[g] + eps_t_max) / 2 + reach_slack
+        for d in (-1, 0, 1):
+            near = (mine + d) % n_buckets
+            slot = min(max(np.searchsorted(used, near), 0), len(used) - 1)
+            if used[slot] != near:
+                continue
+            n_dir = (used[slot] + 0.5) * width - math.pi
+            x = pts[q, 0] * math.cos(n_dir) + pts[q, 1] * math.sin(n_dir)
+            row = sorted_low[slot]
+            lo = np.searchsorted(row, x - reach - span[slot], side="left")
+            hi = np.searchsorted(row, x + reach, side="right")
+            measured += hi - lo
+            for r in range(lo, hi):
+                face = order[first[slot] + r]
+                h = fh[face]
+                if shared[q, cls[h]]:
+                    continue  # this class is known to block the point
+                n_tol = two_phi + rotation[g] + rotation[h]
+                turn = abs((face_angle[face] - angle[q] + math.pi) % (2 * math.pi) - math.pi)
+                if turn > n_tol + ANGLE_SLACK:
+                    continue
+                ax, ay, bx, by = start[face, 0], start[face, 1], end[face, 0], end[face, 1]
+                ex, ey = bx - ax, by - ay
+                sq = max(ex * ex + ey * ey, 1e-300)
+                u = ((pts[q, 0] - ax) * ex + (pts[q, 1] - ay) * ey) / sq
+                u = min(max(u, 0.0), 1.0)
+                dist = math.hypot(pts[q, 0] - (ax + u * ex), pts[q, 1] - (ay + u * ey))
+                if dist <= two_eps_d + (eps_t[g] + eps_t[h]) / 2 + dist_slack:
+                    shared[q, cls[h]] = True
+    return measured

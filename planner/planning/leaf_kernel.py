@@ -14,6 +14,8 @@ import math
 import numba
 import numpy as np
 
+from planner.compiled import c_array
+
 __all__ = ["one_touch_values"]
 
 _M1 = np.uint64(0x5555555555555555)
@@ -143,15 +145,15 @@ def one_touch_values(
     else:
         size, clique = np.zeros(idx.shape, dtype=np.int64), np.zeros(idx.shape, dtype=bool)
     _values(
-        np.ascontiguousarray(rows, dtype=np.uint64),
-        np.ascontiguousarray(sets, dtype=np.uint64),
-        np.ascontiguousarray(idx, dtype=np.int64),
-        np.ascontiguousarray(w, dtype=np.float64),
-        np.ascontiguousarray(inseparable, dtype=np.uint64),
-        np.ascontiguousarray(near, dtype=np.int64),
-        np.ascontiguousarray(near_apart, dtype=np.uint64),
-        np.ascontiguousarray(size, dtype=np.int64),
-        np.ascontiguousarray(clique, dtype=np.bool_),
+        c_array(rows, dtype=np.uint64),
+        c_array(sets, dtype=np.uint64),
+        c_array(idx, dtype=np.int64),
+        c_array(w, dtype=np.float64),
+        c_array(inseparable, dtype=np.uint64),
+        c_array(near, dtype=np.int64),
+        c_array(near_apart, dtype=np.uint64),
+        c_array(size, dtype=np.int64),
+        c_array(clique, dtype=np.bool_),
         0.0 if rate is None else float(rate),
         out,
     )

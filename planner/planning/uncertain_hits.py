@@ -16,6 +16,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from planner.compiled import c_array
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
 
 __all__ = [
@@ -113,10 +114,11 @@ def thin_stretch(
     qx = origins[c, 0, None] + s * dx[c, 0, None]
     qy = origins[c, 1, None] + s * dy[c, 0, None]
     first = np.empty(len(c), dtype=np.int64)
-    _first_deep(
-        np.ascontiguousarray(qx), np.ascontiguousarray(qy), s, t_exit, h, f[c, h],
-        fc.sx, fc.sy, fc.ex, fc.ey, np.ascontiguousarray(fc.valid), fc.geometric, first,
-    )  # fmt: skip
+    points = (c_array(qx, float), c_array(qy, float), c_array(s, float), c_array(t_exit, float))
+    rows = (c_array(h, np.int64), c_array(f[c, h], np.int64))
+    faces = [c_array(a, float) for a in (fc.sx, fc.sy, fc.ex, fc.ey)]
+    tolerance = c_array(fc.geometric, float)
+    _first_deep(*points, *rows, *faces, c_array(fc.valid, bool), tolerance, first)
     out[c, h] = np.minimum(first * step, t_exit - dist[c, h])
     return out
 

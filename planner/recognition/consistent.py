@@ -20,6 +20,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
+from planner.compiled import c_array
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, rotation_matrices, wrap_angle
 
 __all__ = ["ConsistentSet", "consistent_poses", "consistent_set_bounds", "consistent_volume"]
@@ -137,12 +138,12 @@ def _sweep(
     bounded &= ~empty_range
     ok &= ~empty_range[:, None, None]
     # displacement of each model point: R' v + t' - (R v + t), largest over the vertices
-    model_points = np.ascontiguousarray(model_points, dtype=float)
+    model_points = c_array(model_points, dtype=float)
     fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
     norm = np.full((len(theta), len(model_points)), -np.inf)
     _largest_moves(
-        np.ascontiguousarray(vx), np.ascontiguousarray(vy), np.ascontiguousarray(ok),
-        np.ascontiguousarray(theta[:, None] + d_theta), model_points, fit_pts, norm,
+        c_array(vx), c_array(vy), c_array(ok),
+        c_array(theta[:, None] + d_theta), model_points, fit_pts, norm,
     )  # fmt: skip
     radius = np.hypot(*model_points.T)  # (P,) |v|
     moved = norm + radius[None] * delta[:, None] / 2  # (K, P)
@@ -290,15 +291,15 @@ def _polygons(
     bounded = np.zeros(K, dtype=bool)
     w0 = np.broadcast_to(np.asarray(width, dtype=float), theta.shape)
     _polygon_vertices(
-        np.ascontiguousarray(points, dtype=float),
-        np.ascontiguousarray(face_normals, dtype=float),
-        np.ascontiguousarray(face_offsets, dtype=float),
-        np.ascontiguousarray(use),
+        c_array(points, dtype=float),
+        c_array(face_normals, dtype=float),
+        c_array(face_offsets, dtype=float),
+        c_array(use),
         gid,
         g_normals,
         g_use,
-        np.ascontiguousarray(theta[:, None] + d_theta),
-        np.ascontiguousarray(w0),
+        c_array(theta[:, None] + d_theta),
+        c_array(w0),
         vx, vy, ok, bounded,
     )  # fmt: skip
     return vx, vy, ok, bounded

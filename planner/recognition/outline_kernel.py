@@ -26,6 +26,8 @@ import math
 import numba
 import numpy as np
 
+from planner.compiled import c_array
+
 __all__ = ["nearest_face_distances", "pair_outline_distances"]
 
 
@@ -101,13 +103,13 @@ def pair_outline_distances(
     (points (N, P, 2), faces (N, F, 2 each)) and outline ib[m] of `b`: exact when
     `limit` is None; otherwise exact up to `limit` and some value above it for the
     pairs farther apart (all that ``<= limit`` needs, at a fraction of the work)."""
-    ia = np.ascontiguousarray(ia, dtype=np.int64)
-    ib = np.ascontiguousarray(ib, dtype=np.int64)
+    ia = c_array(ia, dtype=np.int64)
+    ib = c_array(ib, dtype=np.int64)
     out = np.zeros(len(ia))
     if len(ia):
         floor, stop = (0.0, math.inf) if limit is None else (float(limit), float(limit))
         arrays = [
-            np.ascontiguousarray(x, dtype=np.float64)
+            c_array(x, dtype=np.float64)
             for x in (a_points, a_starts, a_ends, b_points, b_starts, b_ends)
         ]
         _pairs(*arrays[:3], ia, *arrays[3:], ib, floor, stop, out)
@@ -131,12 +133,12 @@ def _nearest(points, starts, ends, out):  # type: ignore[no-untyped-def]
 def nearest_face_distances(points: np.ndarray, starts: np.ndarray, ends: np.ndarray) -> np.ndarray:
     """(N, J) distance from each point (N, J, 2) to the nearest of the faces (F, 2
     each); inf without faces."""
-    points = np.ascontiguousarray(points, dtype=np.float64)
+    points = c_array(points, dtype=np.float64)
     out = np.empty(points.shape[:2])
     _nearest(
         points,
-        np.ascontiguousarray(starts, dtype=np.float64),
-        np.ascontiguousarray(ends, dtype=np.float64),
+        c_array(starts, dtype=np.float64),
+        c_array(ends, dtype=np.float64),
         out,
     )
     return out
