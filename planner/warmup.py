@@ -22,15 +22,19 @@ from planner.types import Contact, Observation, SensingPath, SensorBounds, Works
 
 __all__ = ["warm_up"]
 
-#: An L-shaped plate with a notch: two touches leave several classes and rotations.
-_PART = {"name": "warm", "outline": [[0, 0], [40, 0], [40, 12], [22, 12], [22, 30], [0, 30]]}
+#: An L-shaped plate and a square: two touches leave several classes, and the
+#: square's rotations are one class (its members' outlines are measured).
+_PARTS = (
+    {"name": "warm-l", "outline": [[0, 0], [40, 0], [40, 12], [22, 12], [22, 30], [0, 30]]},
+    {"name": "warm-square", "outline": [[0, 0], [30, 0], [30, 30], [0, 30]]},
+)
 
 
 def warm_up() -> float:
     """Run one small recognition and plan; returns the seconds it took."""
     start = time.perf_counter()
-    model = object_from_dict(_PART)
-    session = Session([model], SensorBounds(1.0, 0.05), Workspace((0.0, 0.0), 100.0))
+    models = [object_from_dict(part) for part in _PARTS]
+    session = Session(models, SensorBounds(1.0, 0.05), Workspace((0.0, 0.0), 100.0))
     up, right = (
         SensingPath((0.0, -100.0), (0.0, 1.0), 200.0),
         SensingPath((-100.0, 0.0), (1.0, 0.0), 200.0),
