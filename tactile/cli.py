@@ -30,8 +30,10 @@ def _objects(value: str) -> list:
 
 def cmd_bench(args: argparse.Namespace) -> int:
     from planner.types import Workspace
+    from planner.warmup import warm_up
     from tactile.bench import default_bounds, planning_stats, recognition_stats, update_growth
 
+    warm_up()  # kernels loaded (or built) before anything is timed
     workspace = Workspace((0.0, 0.0), args.radius)
     rows, plans = [], []
     for name in args.sets:
