@@ -1,4 +1,4 @@
-"""How the compiled kernels are called (numba, ``cache=True``).
+"""What the compiled kernels share (numba, ``cache=True``).
 
 A kernel is built once per installation and argument types, then loaded from its
 disk cache. The array types include the layout and whether the array may be
@@ -10,16 +10,41 @@ aligned, of the kernel's dtype (copied only when it is not so already).
 
 >>> c_array(np.broadcast_to(np.arange(3.0), (2, 3))).flags.writeable
 True
+>>> segment_gap(1.0, 1.0, 0.0, 0.0, 2.0, 0.0)
+(0.0, 1.0)
 """
 
 from __future__ import annotations
 
+import numba
 import numpy as np
 from numpy.typing import DTypeLike
 
-__all__ = ["c_array"]
+__all__ = ["c_array", "outward", "segment_gap"]
 
 
 def c_array(a: np.ndarray | float, dtype: DTypeLike = None) -> np.ndarray:
     """`a` as a C-ordered, writable, aligned array of `dtype` (default: its own)."""
     return np.require(a, dtype=dtype, requirements=("C", "W", "A"))
+
+
+@numba.njit(cache=True, nogil=True)
+def segment_gap(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
+    """The vector from the point of segment a -> b nearest (px, py) to that point:
+    the closest point is ``a + u (b - a)``, ``u = clip((p - a).(b - a) / |b - a|^2, 0,
+    1)``, the arithmetic of :func:`planner.planning.cast_faces.segment_distance`."""
+    ex, ey = bx - ax, by - ay
+    sq = max(ex * ex + ey * ey, 1e-300)
+    u = ((px - ax) * ex + (py - ay) * ey) / sq
+    u = min(max(u, 0.0), 1.0)
+    return px - (ax + u * ex), py - (ay + u * ey)
+
+
+@numba.njit(cache=True, nogil=True)
+def outward(start, k, n):  # type: ignore[no-untyped-def]
+    """The k-th of n indices taken outward from `start` both ways round: start,
+    start + 1, start - 1, start + 2, ... (mod n); k = 0 .. n - 1 gives each once.
+    Scans that start at the face where the last point stopped find a near face
+    first."""
+    step = (k + 1) // 2
+    return (start + (step if k % 2 == 1 else -step) + n) % n

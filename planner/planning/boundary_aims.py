@@ -17,20 +17,15 @@ from typing import TYPE_CHECKING
 import numba
 import numpy as np
 
-from planner.compiled import c_array
-from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, wrap_angle
-from planner.planning.bitsets import sorted_count
-from planner.planning.cast_faces import segment_distance
+from planner.compiled import c_array, segment_gap
+from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK
 from planner.types import SensorBounds
 
 if TYPE_CHECKING:
     from planner.planning.budget import Budget
     from planner.planning.posed_set import PosedSet
 
-__all__ = ["PAIR_CHUNK", "boundary_aims"]
-
-#: The most candidate (point, face) pairs held at once.
-PAIR_CHUNK = 2_000_000
+__all__ = ["boundary_aims"]
 
 
 def boundary_aims(
@@ -72,14 +67,7 @@ def boundary_aims(
     start = posed.start[owner, f]
     pts = start + frac[sample, None] * (posed.end[owner, f] - start)
     normals = posed.normal[owner, f]
-    shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
-    if plan.buckets is None:
-        q, h, pairs = _blocking_pairs(posed, sensor, pts, owner, normals, plan)
-        shared[q, posed.cls[h]] = True
-    else:
-        pairs = _bucket_blocking(
-            posed, sensor, pts, owner, normals, plan.face_angle, plan.buckets, shared
-        )
+    shared, pairs = _blocking_classes(posed, sensor, pts, owner, normals, plan)
     if budget is not None:
         budget.spend("aim_pair", pairs)
     strength = np.empty(len(pts))
@@ -120,78 +108,6 @@ class _PairPlan:
         return cls(face_angle, buckets, max(1, per_point))
 
 
-def _blocking_pairs(
-    posed: PosedSet,
-    sensor: SensorBounds,
-    pts: np.ndarray,
-    owner: np.ndarray,
-    normals: np.ndarray,
-    plan: _PairPlan,
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """(point, hypothesis) pairs where a face of the hypothesis blocks the point: within
-    the pose/sensor tolerance of it, with the same normal; and how many candidate
-    (point, face) pairs were measured.
-
-    Faces fall into buckets of normal angle at least as wide as the widest angle
-    tolerance; in a bucket they are sorted by their extent along its direction n,
-    and a face within p of a point q spans some of [n.q - p, n.q + p]. Only the
-    faces of a point's bucket and its two neighbours that pass this are measured.
-    """
-    fh, ff = np.nonzero(posed.valid)
-    angle = np.arctan2(normals[:, 1], normals[:, 0])
-    # points in chunks whose candidate pairs stay under PAIR_CHUNK: a round part with
-    # holes, its rotation still free, pairs every point with a million faces
-    step = max(1, PAIR_CHUNK // plan.per_point)
-    found = [
-        _pairs_in(posed, sensor, pts, owner, angle, plan.face_angle, fh, ff, plan.buckets, lo, step)
-        for lo in range(0, len(pts), step)
-    ]
-    if not found:
-        return np.zeros(0, np.int64), np.zeros(0, np.int64), 0
-    pairs = sum(n for _, _, n in found)
-    return (
-        np.concatenate([q for q, _, _ in found]),
-        np.concatenate([h for _, h, _ in found]),
-        pairs,
-    )
-
-
-def _pairs_in(
-    posed: PosedSet,
-    sensor: SensorBounds,
-    pts: np.ndarray,
-    owner: np.ndarray,
-    angle: np.ndarray,
-    face_angle: np.ndarray,
-    fh: np.ndarray,
-    ff: np.ndarray,
-    buckets: _Buckets | None,
-    lo: int,
-    step: int,
-) -> tuple[np.ndarray, np.ndarray, int]:
-    """The blocking (point, hypothesis) pairs of the points lo .. lo + step, and how
-    many candidate pairs were measured."""
-    part = slice(lo, lo + step)
-    pts, owner, angle = pts[part], owner[part], angle[part]
-    if buckets is None:  # some tolerance spans a third of the directions: every face
-        q = np.repeat(np.arange(len(pts)), len(fh))
-        face = np.tile(np.arange(len(fh)), len(pts))
-    else:
-        q, face = _bucket_pairs(posed, sensor, pts, owner, angle, buckets)
-    # the normals first (one gather each), the distances of the pairs they leave
-    h, g = fh[face], owner[q]
-    n_tol = 2 * sensor.normal_error + posed.rotation[g] + posed.rotation[h]
-    turn = np.abs(wrap_angle(face_angle[face] - angle[q]))
-    keep = turn <= n_tol + ANGLE_SLACK
-    measured = len(q)
-    q, face, h, g = q[keep], face[keep], h[keep], g[keep]
-    p_tol = 2 * sensor.position_error + (posed.eps_t[g] + posed.eps_t[h]) / 2
-    s, e, p = posed.start[fh, ff][face], posed.end[fh, ff][face], pts[q]
-    dist = segment_distance(p[:, 0], p[:, 1], s[:, 0], s[:, 1], e[:, 0], e[:, 1])
-    ok = dist <= p_tol + LENGTH_SLACK * posed.scale
-    return q[ok] + lo, h[ok], measured
-
-
 @dataclass(frozen=True)
 class _Buckets:
     """The valid faces in buckets of normal angle, each sorted by its low extent
@@ -204,6 +120,12 @@ class _Buckets:
     order: np.ndarray
     first: np.ndarray
     sorted_low: np.ndarray
+
+    @classmethod
+    def none(cls) -> _Buckets:
+        """No buckets: every face is a candidate."""
+        empty = np.zeros(0, dtype=np.int64)
+        return cls(1, 2 * np.pi, empty, np.zeros(0), empty, empty, np.zeros((0, 0)))
 
     @classmethod
     def of(cls, posed: PosedSet, face_angle: np.ndarray, n_buckets: int) -> _Buckets:
@@ -228,61 +150,35 @@ class _Buckets:
         return cls(n_buckets, width, used, span, order, first, sorted_low)
 
 
-def _bucket_pairs(
-    posed: PosedSet,
-    sensor: SensorBounds,
-    pts: np.ndarray,
-    owner: np.ndarray,
-    angle: np.ndarray,
-    buckets: _Buckets,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Candidate (point, face) pairs: same or neighbouring normal-angle bucket, and
-    overlapping extents along the bucket's direction (a superset of the blocking pairs)."""
-    width, used, span, n_buckets = buckets.width, buckets.used, buckets.span, buckets.n_buckets
-    # the point's bucket and its two neighbours, where used
-    mine = np.floor((angle + np.pi) / width).astype(np.int64)
-    near = (mine[:, None] + np.array([-1, 0, 1])) % n_buckets  # (Q, 3)
-    slot = np.clip(np.searchsorted(used, near), 0, len(used) - 1)
-    ok = used[slot] == near
-    qi, k = np.nonzero(ok)
-    b = slot[qi, k]
-    n_dir = (used[b] + 0.5) * width - np.pi
-    x = pts[qi, 0] * np.cos(n_dir) + pts[qi, 1] * np.sin(n_dir)
-    # within p of the point: 2 eps_d + (eps_t(g) + eps_t(h)) / 2, at most this
-    reach = 2 * sensor.position_error + (posed.eps_t[owner[qi]] + posed.eps_t.max()) / 2
-    reach = reach + 2e-9 * posed.scale
-    lo = sorted_count(buckets.sorted_low, b, x - reach - span[b], "left")
-    hi = sorted_count(buckets.sorted_low, b, x + reach, "right")
-    count = hi - lo
-    q = np.repeat(qi, count)
-    at = np.arange(len(q)) - np.repeat(np.cumsum(count) - count, count)
-    face = buckets.order[buckets.first[np.repeat(b, count)] + np.repeat(lo, count) + at]
-    return q, face
-
-
-def _bucket_blocking(
+def _blocking_classes(
     posed: PosedSet,
     sensor: SensorBounds,
     pts: np.ndarray,
     owner: np.ndarray,
     normals: np.ndarray,
-    face_angle: np.ndarray,
-    buckets: _Buckets,
-    shared: np.ndarray,
-) -> int:
-    """The blocking classes of every point into `shared` (points, classes), through
-    the buckets (:func:`_bucket_pairs`, then the normal and distance tests of
-    :func:`_pairs_in`) in one compiled pass without the pairs' arrays; returns how
-    many candidate (point, face) pairs were measured."""
+    plan: _PairPlan,
+) -> tuple[np.ndarray, int]:
+    """(points, classes) bool: the classes with a face blocking each point, within the
+    pose/sensor tolerance of it and with the same normal; and how many candidate
+    (point, face) pairs were measured.
+
+    Faces fall into buckets of normal angle at least as wide as the widest angle
+    tolerance; in a bucket they are sorted by their extent along its direction n,
+    and a face within p of a point q spans some of [n.q - p, n.q + p]. Only the
+    faces of a point's bucket and its two neighbours that pass this are measured
+    (every face when some tolerance spans a third of the directions). One compiled
+    pass, which holds no pairs: a round part with holes, its rotation still free,
+    pairs every point with a million faces."""
     fh, ff = np.nonzero(posed.valid)
     start, end = posed.start[fh, ff], posed.end[fh, ff]
-    b = buckets
+    b = plan.buckets or _Buckets.none()
     arrays = (
         c_array(pts, dtype=float),
         c_array(owner, dtype=np.int64),
         np.arctan2(normals[:, 1], normals[:, 0]),
     )
     table = (
+        plan.buckets is None,
         float(b.width),
         int(b.n_buckets),
         c_array(b.used, np.int64),
@@ -291,7 +187,7 @@ def _bucket_blocking(
         c_array(b.first, np.int64),
         c_array(b.sorted_low, float),
     )
-    faces = (c_array(face_angle, float), c_array(fh, np.int64), c_array(start), c_array(end))
+    faces = (c_array(plan.face_angle, float), c_array(fh, np.int64), c_array(start), c_array(end))
     tolerances = (
         c_array(posed.rotation, float),
         c_array(posed.eps_t, float),
@@ -302,7 +198,24 @@ def _bucket_blocking(
         2e-9 * posed.scale,
         LENGTH_SLACK * posed.scale,
     )
-    return int(_blocking_kernel(*arrays, *table, *faces, *tolerances, shared))
+    shared = np.zeros((len(pts), posed.n_classes), dtype=bool)
+    return shared, int(_blocking_kernel(*arrays, *table, *faces, *tolerances, shared))
+
+
+@numba.njit(cache=True, nogil=True)
+def _blocks(q, face, g, pts, angle, face_angle, start, end, h, rotation, eps_t, tol):  # type: ignore[no-untyped-def]
+    """Does `face` (of hypothesis h) block point q (of hypothesis g)? Its normal
+    within the angle tolerance of the point's, and the point within the position
+    tolerance of it; `tol` = (2 phi, 2 eps_d, the distance's rounding slack)."""
+    two_phi, two_eps_d, dist_slack = tol
+    n_tol = two_phi + rotation[g] + rotation[h]
+    turn = abs((face_angle[face] - angle[q] + math.pi) % (2 * math.pi) - math.pi)
+    if turn > n_tol + ANGLE_SLACK:
+        return False
+    gap = segment_gap(
+        pts[q, 0], pts[q, 1], start[face, 0], start[face, 1], end[face, 0], end[face, 1]
+    )
+    return math.hypot(*gap) <= two_eps_d + (eps_t[g] + eps_t[h]) / 2 + dist_slack
 
 
 @numba.njit(cache=True, nogil=True)
@@ -310,6 +223,7 @@ def _blocking_kernel(  # type: ignore[no-untyped-def]
     pts,
     owner,
     angle,
+    every_face,
     width,
     n_buckets,
     used,
@@ -331,9 +245,21 @@ def _blocking_kernel(  # type: ignore[no-untyped-def]
     dist_slack,
     shared,
 ):
+    """:func:`_blocking_classes`' pass: `shared` filled, the pairs measured returned.
+    A class already found blocking a point is not measured again."""
+    tol = (two_phi, two_eps_d, dist_slack)
     measured = 0
     for q in range(pts.shape[0]):
         g = owner[q]
+        if every_face:
+            measured += fh.shape[0]
+            for face in range(fh.shape[0]):
+                h = fh[face]
+                if not shared[q, cls[h]] and _blocks(
+                    q, face, g, pts, angle, face_angle, start, end, h, rotation, eps_t, tol
+                ):
+                    shared[q, cls[h]] = True
+            continue
         mine = math.floor((angle[q] + math.pi) / width)
         reach = two_eps_d + (eps_t[g] + eps_t_max) / 2 + reach_slack
         for d in (-1, 0, 1):
@@ -350,18 +276,8 @@ def _blocking_kernel(  # type: ignore[no-untyped-def]
             for r in range(lo, hi):
                 face = order[first[slot] + r]
                 h = fh[face]
-                if shared[q, cls[h]]:
-                    continue  # this class is known to block the point
-                n_tol = two_phi + rotation[g] + rotation[h]
-                turn = abs((face_angle[face] - angle[q] + math.pi) % (2 * math.pi) - math.pi)
-                if turn > n_tol + ANGLE_SLACK:
-                    continue
-                ax, ay, bx, by = start[face, 0], start[face, 1], end[face, 0], end[face, 1]
-                ex, ey = bx - ax, by - ay
-                sq = max(ex * ex + ey * ey, 1e-300)
-                u = ((pts[q, 0] - ax) * ex + (pts[q, 1] - ay) * ey) / sq
-                u = min(max(u, 0.0), 1.0)
-                dist = math.hypot(pts[q, 0] - (ax + u * ex), pts[q, 1] - (ay + u * ey))
-                if dist <= two_eps_d + (eps_t[g] + eps_t[h]) / 2 + dist_slack:
+                if not shared[q, cls[h]] and _blocks(
+                    q, face, g, pts, angle, face_angle, start, end, h, rotation, eps_t, tol
+                ):
                     shared[q, cls[h]] = True
     return measured

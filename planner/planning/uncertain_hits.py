@@ -16,7 +16,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from planner.compiled import c_array
+from planner.compiled import c_array, outward, segment_gap
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
 
 __all__ = [
@@ -142,15 +142,13 @@ def _first_deep(qx, qy, s, t_exit, h, hint, sx, sy, ex, ey, valid, geometric, fi
                 break
             shallow = False
             for j in range(n_faces):
-                step = (j + 1) // 2
-                f = (near + (step if j % 2 == 1 else -step) + n_faces) % n_faces
+                f = outward(near, j, n_faces)
                 if not valid[row, f]:
                     continue
-                ux, uy = ex[row, f] - sx[row, f], ey[row, f] - sy[row, f]
-                sq = max(ux * ux + uy * uy, 1e-300)
-                u = ((qx[i, k] - sx[row, f]) * ux + (qy[i, k] - sy[row, f]) * uy) / sq
-                u = min(max(u, 0.0), 1.0)
-                d = math.hypot(qx[i, k] - (sx[row, f] + u * ux), qy[i, k] - (sy[row, f] + u * uy))
+                gap = segment_gap(
+                    qx[i, k], qy[i, k], sx[row, f], sy[row, f], ex[row, f], ey[row, f]
+                )
+                d = math.hypot(*gap)
                 if d < geometric[row]:
                     shallow, near = True, f
                     break

@@ -26,20 +26,16 @@ import math
 import numba
 import numpy as np
 
-from planner.compiled import c_array
+from planner.compiled import c_array, outward, segment_gap
 
 __all__ = ["nearest_face_distances", "pair_outline_distances"]
 
 
 @numba.njit(cache=True, nogil=True)
 def _segment_distance(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
-    """Distance from (px, py) to the segment a -> b."""
-    ex, ey = bx - ax, by - ay
-    sq = max(ex * ex + ey * ey, 1e-300)
-    u = ((px - ax) * ex + (py - ay) * ey) / sq
-    u = min(max(u, 0.0), 1.0)
-    gx = px - (ax + u * ex)
-    gy = py - (ay + u * ey)
+    """Distance from (px, py) to the segment a -> b (the root of the squared gap,
+    as the point-by-face pass measured it)."""
+    gx, gy = segment_gap(px, py, ax, ay, bx, by)
     return math.sqrt(gx * gx + gy * gy)
 
 
@@ -59,8 +55,7 @@ def _directed(points, starts, ends, floor, stop):  # type: ignore[no-untyped-def
         best_face = hint
         for k in range(n_faces):
             # hint, hint + 1, hint - 1, hint + 2, ... : every face once
-            step = (k + 1) // 2
-            f = (hint + (step if k % 2 == 1 else -step) + n_faces) % n_faces
+            f = outward(hint, k, n_faces)
             d = _segment_distance(
                 px, py, starts[f, 0], starts[f, 1], ends[f, 0], ends[f, 1]
             )  # fmt: skip

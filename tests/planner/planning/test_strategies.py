@@ -416,9 +416,9 @@ def test_a_path_across_a_slide_family_pins_it():
 
 
 @pytest.mark.parametrize("name", ["workshop", "curved"])
-def test_boundary_aims_are_the_same_whatever_the_pair_chunk(name, monkeypatch):
-    """The (point, face) pairs go in chunks of points so that a round part with holes
-    never holds them all; the aims must not depend on the chunk."""
+def test_the_buckets_find_every_face_that_blocks_an_aim(name, monkeypatch):
+    """Buckets of normal angle and extents only skip faces that cannot block a point:
+    the aims must be those found by measuring every face."""
     from planner.planning import boundary_aims as module
     from planner.planning.posed_set import pose_hypotheses
     from planner.recognition.session import Session
@@ -429,9 +429,12 @@ def test_boundary_aims_are_the_same_whatever_the_pair_chunk(name, monkeypatch):
         Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -30), (0, -1)))
     )
     posed = pose_hypotheses(session.hypotheses, session.models_by_name)
-    whole = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
-    monkeypatch.setattr(module, "PAIR_CHUNK", 50)
-    chunked = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
-    assert len(whole[0]) > 0
-    np.testing.assert_array_equal(whole[0], chunked[0])
-    np.testing.assert_array_equal(whole[1], chunked[1])
+    bucketed = module._PairPlan.of(posed, session.bounds)
+    assert bucketed.buckets is not None
+    found = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
+    every = module._PairPlan(bucketed.face_angle, None, int(posed.valid.sum()))
+    monkeypatch.setattr(module._PairPlan, "of", classmethod(lambda cls, *_: every))
+    measured = module.boundary_aims(posed, session.bounds, 40, 6, np.random.default_rng(3))
+    assert len(found[0]) > 0
+    np.testing.assert_array_equal(found[0], measured[0])
+    np.testing.assert_array_equal(found[1], measured[1])
