@@ -80,7 +80,7 @@ class Budget:
         the stages that can be told their cost in advance size themselves by it."""
         return max(0.0, self.work - self.units) / UNIT_US[kind]
 
-    def spend_updates(self, count: int, hypotheses: int) -> None:
+    def spend_updates(self, count: int, hypotheses: float) -> None:
         """`count` recognition updates of a session carrying `hypotheses` hypotheses."""
         self.spend("recognition_update", count)
         self.spend("recognition_hypothesis", count * hypotheses)

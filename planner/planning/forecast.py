@@ -38,13 +38,15 @@ from planner.planning.posed_set import pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
 from planner.recognition.session import Session
-from planner.types import Contact, Observation, SensingPath
+from planner.types import Contact, Hypothesis, Observation, SensingPath
 
 __all__ = [
     "FACES_PER_HYPOTHESIS",
     "RecognitionRanking",
+    "RefiningPrediction",
     "forecast_distinguishing",
     "recognition_ranking",
+    "recognition_refining",
     "update_size",
     "with_forecast",
 ]
@@ -211,3 +213,93 @@ def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h
     except InvalidObservationError:
         return 0
     return len({g.equivalence_class for g in after})
+
+
+@dataclass(frozen=True, eq=False)
+class RefiningPrediction:
+    """What the recognition predicts of shortlisted refining paths `rows` (best
+    first) for a session with one class left: the class' bound after each path's
+    predicted contact (`translation`, `rotation`, `eps_t`), and whether it would
+    be within the session's accuracy (`admitted`); `current` the bound now."""
+
+    rows: np.ndarray
+    translation: np.ndarray
+    rotation: np.ndarray
+    eps_t: np.ndarray
+    admitted: np.ndarray
+    current: tuple[float, float]
+
+
+def recognition_refining(
+    session: Session, found: Analysis, budget: Budget | None = None
+) -> RefiningPrediction:
+    """Paths that shrink the one class' bound, as the recognition predicts it.
+
+    The outcome model credits a refining touch only where the contact is sure;
+    while the pose can still slide far (a part touched only on its flats) every
+    contact near the parts that would pin it is uncertain. Here the class' most
+    probable member predicts its nominal hit on each candidate; the candidates
+    whose predicted contact constrains the pose most (largest smallest eigenvalue
+    of the contacts' normal equations, rotation scaled by the part's size) are
+    shortlisted, the session observes each prediction, and the bound it would
+    report is read off. Best first: within the accuracy, then the smaller bound
+    (each part as a share of the accuracy), then the shorter motion."""
+    budget = budget or Budget()
+    posed, out, cands = found.posed, found.outcomes, found.candidates
+    best = int(np.argmax(posed.weight))
+    now = session.localization.bound
+    current = (float(now.translation), float(now.rotation)) if now else (np.inf, np.inf)
+    default = np.isnan(cands.height)  # type: ignore[arg-type]
+    rows = np.flatnonzero(out.hit[:, best] & default)
+    hyp = session.hypotheses[0]
+    score = _constraint_gain(session, out.point[rows, best], out.normal[rows, best], hyp)
+    shortlist = rows[np.lexsort((found.motion[rows], -score))][:SHORTLIST]
+    judged: list[tuple[int, float, float, float, bool]] = []
+    size = update_size(session)
+    accuracy = session.accuracy
+    for c in shortlist:
+        if judged and budget.exhausted():
+            break
+        contact = Contact(tuple(out.point[c, best]), tuple(out.normal[c, best]))
+        try:
+            after = session.observe(Observation(cands.path(int(c)), contact))
+        except InvalidObservationError:
+            continue
+        budget.spend_updates(1, size)
+        where = after.localization
+        if where.bound is None or where.classes != 1:
+            continue
+        b = where.bound
+        judged.append(
+            (int(c), float(b.translation), float(b.rotation), float(b.eps_t), not where.missing)
+        )
+    if not judged:
+        none = np.zeros(0)
+        return RefiningPrediction(none.astype(int), none, none, none, none.astype(bool), current)
+    c, t, r, e, ok = (np.array(v) for v in zip(*judged, strict=True))
+    share = t / accuracy.translation + r / accuracy.rotation
+    order = np.lexsort((found.motion[c], share, ~ok))
+    return RefiningPrediction(c[order], t[order], r[order], e[order], ok[order], current)
+
+
+def _constraint_gain(
+    session: Session, points: np.ndarray, normals: np.ndarray, hyp: Hypothesis
+) -> np.ndarray:
+    """(n,) the smallest eigenvalue of the contacts' normal equations over the pose
+    (x, y, rotation x the part's size) with each predicted contact (points,
+    normals (n, 2)) added to the session's: how well the pose would be pinned."""
+    centre = np.array([hyp.pose.x, hyp.pose.y])
+    scale = session.length_scale
+
+    def rows(p: np.ndarray, n: np.ndarray) -> np.ndarray:
+        arm = p - centre
+        return np.column_stack([n, (arm[:, 0] * n[:, 1] - arm[:, 1] * n[:, 0]) / scale])
+
+    known = [(c.point, c.normal) for c in session.contacts]
+    base = np.zeros((3, 3))
+    if known:
+        j = rows(np.array([k[0] for k in known]), np.array([k[1] for k in known]))
+        base = j.T @ j
+    new = rows(points, normals)
+    normal_eq = base[None] + new[:, :, None] * new[:, None, :]
+    return np.linalg.eigvalsh(normal_eq)[:, 0]

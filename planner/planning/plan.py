@@ -25,7 +25,7 @@ from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import recognition_ranking, with_forecast
+from planner.planning.forecast import recognition_ranking, recognition_refining, with_forecast
 from planner.planning.probes import opening_probe
 from planner.planning.refinement import refinement, scores_after
 from planner.planning.representatives import face_counts, representatives
@@ -154,10 +154,9 @@ def plan(
         budget=budget,
     )
     if classes == 1:  # one class, its bound short of the required accuracy
-        paths, note = _refining(
-            found, hypotheses, models_by_name(models), contacts, sensor, _no_ranking(found), config
+        paths, note = _one_class(
+            found, hypotheses, models, contacts, sensor, config, session, budget
         )
-        note = note or "one class left; no path shrinks its bound further"
         return finish("ambiguous", paths, truncated=found.truncated, note=note, classes=1)
     ranking = rank_candidates(
         found.table,
@@ -295,6 +294,63 @@ def _refining(
         f"{ranking.note or 'one class left, its bound short of the required accuracy'}: "
         "refining the pose instead "
         f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
+    )
+    return paths, note
+
+
+def _one_class(
+    found: Analysis,
+    hypotheses: Sequence[Hypothesis],
+    models: Mapping[str, ObjectModel] | Sequence[ObjectModel],
+    contacts: Sequence[Contact],
+    sensor: SensorBounds,
+    config: StrategyConfig,
+    session: Session | None,
+    budget: Budget,
+) -> tuple[list[PlannedPath], str]:
+    """One class left, its bound short of the accuracy: the paths sure to shrink it
+    by the outcome model, else (given the session) those the recognition predicts
+    shrink it."""
+    by_name = models_by_name(models)
+    paths, note = _refining(
+        found, hypotheses, by_name, contacts, sensor, _no_ranking(found), config
+    )
+    if not paths and session is not None:
+        paths, note = _refining_by_recognition(found, session, config, budget)
+    return paths, note or "one class left; no path shrinks its bound further"
+
+
+def _refining_by_recognition(
+    found: Analysis, session: Session, config: StrategyConfig, budget: Budget
+) -> tuple[list[PlannedPath], str | None]:
+    """One class left, short of the accuracy, and no refining touch sure for the
+    outcome model: the paths after which the recognition predicts the smaller
+    bound (:func:`~planner.planning.forecast.recognition_refining`), those that
+    shrink it by at least `_REFINE_GAIN`, best first."""
+    judged = recognition_refining(session, found, budget)
+    now_t, now_r = judged.current
+    useful = (judged.translation < (1 - _REFINE_GAIN) * now_t) | (
+        judged.rotation < (1 - _REFINE_GAIN) * now_r
+    )
+    ranking = _no_ranking(found)
+    paths = [
+        dataclasses.replace(
+            _planned(found, int(i), ranking, family=REFINING, expected_eps_t=float(e)),
+            scored_by="recognition",
+        )
+        for i, e in zip(judged.rows[useful], judged.eps_t[useful], strict=True)
+    ][: config.max_paths]
+    if not paths:
+        return [], (
+            "one class left, its bound short of the required accuracy; the recognition "
+            f"predicts no smaller bound after any of the {len(judged.rows)} paths it judged"
+        )
+    first = np.flatnonzero(useful)[0]
+    note = (
+        "one class left, its bound short of the required accuracy: refining the pose "
+        "on the recognition's predictions (translation bound "
+        f"{now_t:.3g} -> {judged.translation[first]:.3g}, rotation "
+        f"{now_r:.3g} -> {judged.rotation[first]:.3g})"
     )
     return paths, note
 

@@ -227,3 +227,72 @@ def test_a_curved_end_is_touched_to_pin_a_slide(monkeypatch):
     monkeypatch.setattr(refine_module, "SMOOTH_TURN", 0.0)
     blind = plan_session(session, (200.0, 0.0), config, 0)
     assert not blind.paths or blind.paths[0].expected_eps_t > plan.paths[0].expected_eps_t + 1.0
+
+
+def _stadium_touched_twice():
+    """A world of the shared curved set (the stadium, seen in a simulated trial)
+    touched twice near one end of a straight side: one class, but the part can
+    still slide about 30 along its sides, and every contact that would pin it is
+    uncertain for the outcome model."""
+    from planner.types import Workspace
+    from tests.conftest import object_set
+
+    models = [m for m in object_set("curved") if len(m.stable_poses[0].outline) <= 500]
+    session = Session(models, SensorBounds(1.0, 0.05), Workspace((0, 0), 200))
+    for origin, direction, length, point, normal in [
+        ((200.0, 0.0), (-1.0, 0.0), 400.0, (49.336, -0.487), (0.98726, -0.15913)),
+        (
+            (51.764, -193.185), (-0.217495, 0.976062), 215.489,
+            (22.966, -61.463), (0.90255, -0.43059),
+        ),
+    ]:  # fmt: skip
+        path = SensingPath(origin, direction, length)
+        session = session.observe(Observation(path, Contact(point, normal)))
+    return session
+
+
+def test_the_recognition_refines_where_the_outcome_model_is_unsure():
+    """One class short of the accuracy and no contact sure for the outcome model:
+    the plan still offers refining paths, ranked on the bound the recognition
+    predicts (before, the plan was empty and the robot stopped). Observing the
+    first path's predicted contact gives the predicted bound, within the accuracy."""
+    from planner.planning.analysis import models_by_name
+    from planner.planning.plan import plan_session
+
+    session = _stadium_touched_twice()
+    where = session.localization
+    assert where.classes == 1 and where.missing == ("accuracy",)
+    assert where.bound.translation > 3 * session.accuracy.translation
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
+    assert found.paths, found.note
+    first = found.paths[0]
+    assert first.family == REFINING and first.scored_by == "recognition"
+    assert "recognition's predictions" in (found.note or "")
+    # the nominal contact of the class' best member on that path, observed
+    best = session.hypotheses[0]
+    models = models_by_name(session.models)
+    stable = models[best.object].stable_poses[best.stable_pose]
+    outline = shapely.LinearRing(best.pose.apply(stable.outline))
+    start = np.array(first.path.origin)
+    end = start + np.multiply(first.path.direction, first.path.length)
+    line = shapely.LineString([start, end])
+    hits = outline.intersection(line)
+    assert not hits.is_empty
+    points = np.array([g.coords[0] for g in getattr(hits, "geoms", [hits])])
+    point = points[np.argmin(np.linalg.norm(points - start, axis=1))]
+    contact = Contact(tuple(point), _normal_at(outline, point))
+    after = session.observe(Observation(first.path, contact))
+    assert after.localization.classes == 1
+    assert after.localization.bound.translation < where.bound.translation / 2
+    assert not after.localization.missing
+
+
+def _normal_at(ring, point):
+    """The outward normal of the ring's face nearest `point` (counter-clockwise ring)."""
+    coords = np.array(ring.coords)
+    a, b = coords[:-1], coords[1:]
+    t = np.clip(np.einsum("ij,ij->i", point - a, b - a) / np.einsum("ij,ij->i", b - a, b - a), 0, 1)
+    k = int(np.argmin(np.linalg.norm(a + t[:, None] * (b - a) - point, axis=1)))
+    d = (b[k] - a[k]) / np.linalg.norm(b[k] - a[k])
+    n = np.array([d[1], -d[0]])
+    return tuple(n if ring.is_ccw else -n)
