@@ -67,8 +67,13 @@ def rotation_matrix(theta: float) -> np.ndarray:
 
 def rotation_matrices(theta: np.ndarray) -> np.ndarray:
     """Stack of rotation matrices (..., 2, 2) for an array of angles."""
-    c, s = np.cos(theta), np.sin(theta)
-    return np.stack([np.stack([c, -s], -1), np.stack([s, c], -1)], -2)
+    theta = np.asarray(theta, dtype=float)
+    out = np.empty((*theta.shape, 2, 2))
+    np.cos(theta, out=out[..., 0, 0])
+    np.sin(theta, out=out[..., 1, 0])
+    out[..., 1, 1] = out[..., 0, 0]
+    np.negative(out[..., 1, 0], out=out[..., 0, 1])
+    return out
 
 
 def signed_area(ring: np.ndarray) -> float:
