@@ -47,6 +47,9 @@ __all__ = ["plan", "plan_session"]
 
 #: The share of a plan's work kept for the forecast of its first paths.
 FORECAST_SHARE = 0.25
+#: Below this probability of changing the hypotheses (for the outcome model) the
+#: best path is weak, and the recognition's predictions rank the candidates.
+_WEAK = 0.05
 #: Smallest share of the expected error disk a refining path must remove.
 _REFINE_GAIN = 0.01
 
@@ -169,7 +172,7 @@ def plan(
         budget=budget,
     )
     paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
-    note = ranking.note
+    paths, note = _unless_weak(found, session, ranking, config, budget, paths)
     if not paths:
         paths, note = _uninformative(
             found, hypotheses, models_by_name(models), contacts, sensor, ranking, config, gen,
@@ -390,16 +393,43 @@ def _no_ranking(found: Analysis) -> Ranking:
     return Ranking(np.zeros(0, dtype=int), np.ones(n), np.ones(n, dtype=bool), False, None)
 
 
+def _unless_weak(
+    found: Analysis,
+    session: Session | None,
+    ranking: Ranking,
+    config: StrategyConfig,
+    budget: Budget,
+    paths: list[PlannedPath],
+) -> tuple[list[PlannedPath], str | None]:
+    """The ranked `paths`, unless the best changes the hypotheses with probability
+    under `_WEAK` for the outcome model: then (given the session) those the
+    recognition predicts change them, when it finds any. ``thesis`` and ``random``
+    keep their own choice."""
+    if not paths or session is None or config.name in ("thesis", "random"):
+        return paths, ranking.note
+    p_inf = float(found.info.p_informative[ranking.order[0]])
+    if p_inf >= _WEAK:
+        return paths, ranking.note
+    why = f"the outcome model's best path changes the hypotheses with probability {p_inf:.2g}"
+    judged, said = _by_recognition(found, session, ranking, config, budget, why)
+    if not judged:
+        return paths, ranking.note
+    return judged, "; ".join(filter(None, [said, ranking.note]))
+
+
 def _by_recognition(
     found: Analysis,
     session: Session,
     ranking: Ranking,
     config: StrategyConfig,
     budget: Budget,
+    why: str | None = None,
 ) -> tuple[list[PlannedPath], str | None]:
-    """No candidate informative for the outcome model: the shortlisted paths after
-    which the recognition predicts fewer classes, best first (P(DM) by the
-    recognition, then expected classes left), scored by the recognition."""
+    """No candidate informative for the outcome model (or only weakly: `why`, by
+    default the ranking's note): the shortlisted paths after which the
+    recognition predicts fewer classes, best first (P(DM) by the recognition,
+    then expected classes left), scored by the recognition."""
+    why = why or ranking.note
     judged = recognition_ranking(session, found, budget)
     useful = judged.expected_classes < judged.current - 1e-9
     # the recognition's P(DM) is the forecast of the first `config.forecast` paths
@@ -415,12 +445,12 @@ def _by_recognition(
     ][: config.max_paths]
     if not paths:
         note = (
-            f"{ranking.note}; the recognition predicts {judged.current} classes after each "
+            f"{why}; the recognition predicts {judged.current} classes after each "
             f"of the {len(judged.rows)} paths it judged"
         )
         return [], note
     note = (
-        f"{ranking.note}: ranked on the recognition's predictions (classes "
+        f"{why}: ranked on the recognition's predictions (classes "
         f"{judged.current} -> {judged.expected_classes[useful][0]:.2f} expected, "
         f"P(DM) {judged.p_distinguishing[useful][0]:.2f})"
     )

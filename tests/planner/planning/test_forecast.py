@@ -77,3 +77,47 @@ def test_forecast_of_nothing():
     assert forecast_distinguishing(session, path) is None
     with pytest.raises(Exception, match="forecast"):
         StrategyConfig(forecast=-1)
+
+
+def _ellipse_touched_three_times() -> Session:
+    """A world of the shared curved set (the ellipse, from a simulated trial at the
+    5 degree sensor) after a miss and three contacts: seven classes, and the
+    outcome model's best path changes them with probability under 1%."""
+    from planner.types import Contact, Observation, Workspace
+
+    models = [m for m in object_set("curved") if len(m.stable_poses[0].outline) <= 500]
+    session = Session(models, SensorBounds(1.0, math.radians(5)), Workspace((0, 0), 200))
+    steps = [
+        ((200.0, 0.0), (-1.0, 0.0), 400.0, None),
+        (
+            (-17.4311, -199.2389), (0.0871557, 0.9961947), 400.0,
+            ((-7.05851, -81.40478), (0.1565347, -0.9876725)),
+        ),
+        (
+            (-54.9538, 192.3021), (0.1565347, -0.9876725), 397.0672,
+            ((-22.04934, -15.92739), (-0.5430004, 0.8397324)),
+        ),
+        (
+            (174.0837, -98.4625), (-0.9109793, 0.4124520), 212.3509,
+            ((52.42617, -43.32295), (0.8524425, -0.5228211)),
+        ),
+    ]  # fmt: skip
+    for origin, direction, length, contact in steps:
+        met = None if contact is None else Contact(*contact)
+        session = session.observe(Observation(SensingPath(origin, direction, length), met))
+    return session
+
+
+def test_a_weak_best_path_gives_way_to_the_recognitions_ranking():
+    """When the outcome model's best path would change the hypotheses only rarely
+    (its worst-case tolerances call nearly every outcome confusable), the plan ranks
+    the candidates on the recognition's predictions instead, and says so."""
+    session = _ellipse_touched_three_times()
+    assert len({h.equivalence_class for h in session.hypotheses}) > 1
+    config = StrategyConfig(budget_ms=None)
+    found = plan_session(session, (174.08, -98.46), config, 0)
+    assert found.paths
+    first = found.paths[0]
+    assert first.scored_by == "recognition"
+    assert "changes the hypotheses with probability" in (found.note or "")
+    assert first.p_forecast is not None and first.p_forecast > 0.5

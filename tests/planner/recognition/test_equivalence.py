@@ -198,11 +198,11 @@ def test_classes_do_not_chain():
 
 @pytest.mark.parametrize("name", ALL_SETS)
 def test_localized_names_the_true_object_and_bounds_the_true_outline(name):
-    """120 worlds drawn from the prior per set, four random hitting touches each at
+    """200 worlds drawn from the prior per set, four random hitting touches each at
     1 mm / 3 degrees: whenever the session says localized, it is right."""
     models = models_of(name)
     localized = 0
-    for seed in range(120):
+    for seed in range(200):
         world, session = touched(models, 1000 + seed, 4)
         if session.status != "localized":
             continue
