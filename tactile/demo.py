@@ -56,10 +56,14 @@ def _step_line(number: int, step: Step) -> str:
         else f"contact ({contact.point[0]:.1f}, {contact.point[1]:.1f}) "
         f"normal {math.degrees(contact.normal_angle):.0f} deg"
     )
+    # the recognition's own forecast, where it was made: what to act on when the
+    # outcome model's worst case says 0
+    p = step.advice.p_forecast
+    forecast = "" if p is None else f" (forecast {_num(p)})"
     return (
         f"touch {number}: path from ({path.origin[0]:.1f}, {path.origin[1]:.1f}) "
         f"direction ({_num(path.direction[0])}, {_num(path.direction[1])}) "
-        f"[P(DM) {_num(step.advice.p_distinguishing)}, "
+        f"[P(DM) {_num(step.advice.p_distinguishing)}{forecast}, "
         f"E[touches] {_num(step.advice.expected_remaining)}] -> {what}; "
         f"{step.update.hypotheses} hypotheses in {step.update.classes} classes, "
         f"status {step.update.status}"
