@@ -30,6 +30,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.errors import InvalidObservationError
+from planner.geometry import LENGTH_SLACK
 from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
@@ -38,7 +39,7 @@ from planner.planning.posed_set import pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
 from planner.recognition.session import Session
-from planner.types import Contact, Hypothesis, Observation, SensingPath
+from planner.types import Contact, Hypothesis, Observation, SensingPath, SensorBounds
 
 __all__ = [
     "FACES_PER_HYPOTHESIS",
@@ -127,9 +128,11 @@ def with_forecast(
 
 
 #: Most candidate paths, and most classes, the recognition is asked about when the
-#: outcome model calls every candidate uninformative (one update per pair).
+#: outcome model calls every candidate uninformative (one update per pair), and
+#: how many times as many paths while none of them is predicted to change anything.
 SHORTLIST = 8
 SHORTLIST_CLASSES = 4
+SHORTLIST_ROUNDS = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -151,28 +154,39 @@ def recognition_ranking(
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
     Shortlist: paths aimed at the classes' differences first (one per feature
-    before the rest), then by the outcome model's P(informative) and motion. Each
-    of the most probable classes predicts its nominal outcome on a path with its
-    best member (the cast of the analysis); the session observes it; the classes left are counted.
-    ``E[classes] = sum_k w(k) classes(after k's outcome)``. The first path is
-    always judged, the rest while the `budget` allows."""
+    before the rest), then the others by how far apart the classes' nominal
+    outcomes lie (in error bounds), the outcome model's P(informative) and motion.
+    Each of the most probable classes predicts its nominal outcome on a path with
+    its best member (the cast of the analysis); the session observes it; the
+    classes left are counted. ``E[classes] = sum_k w(k) classes(after k's
+    outcome)``. The first path is always judged, the rest while the `budget`
+    allows: `SHORTLIST` of them, and past that (up to `SHORTLIST_ROUNDS` times as
+    many) while none is predicted to change the classes."""
     budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
-    # the paths aimed at the classes' differences in the order they were made (one
-    # per feature first), then the others by P(informative) and motion
-    feature = np.flatnonzero(cands.source == "feature")
-    other = np.flatnonzero(cands.source != "feature")
-    other = other[np.lexsort((found.motion[other], -found.info.p_informative[other]))]
-    shortlist = np.concatenate([feature, other])[:SHORTLIST]
     top = np.argsort(-posed.class_weight, kind="stable")[:SHORTLIST_CLASSES]
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
     best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
+    # the paths aimed at the classes' differences in the order they were made (one
+    # per feature first), then the others where the classes' outcomes differ most
+    feature = np.flatnonzero(cands.source == "feature")
+    other = np.flatnonzero(cands.source != "feature")
+    apart = _outcomes_apart(out, other, np.array(best), session.working_sensor)
+    order = np.lexsort((found.motion[other], -found.info.p_informative[other], -apart))
+    other, apart = other[order], apart[order]
+    # past the first `SHORTLIST`, only paths where the outcomes lie over a bound apart
+    shortlist = np.concatenate([feature, other])
+    keep = np.arange(len(shortlist)) < SHORTLIST
+    keep[len(feature) :] |= apart > 1.0
+    shortlist = shortlist[keep][: SHORTLIST * SHORTLIST_ROUNDS]
     rows, p_dm, expected = [], [], []
     size = update_size(session)
     for c in shortlist:
         if rows and budget.exhausted():
             break
+        if len(rows) >= SHORTLIST and min(expected) < current - 1e-9:
+            break  # a path predicted to change the classes is among those judged
         left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
         budget.spend_updates(len(best), size)
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
@@ -186,6 +200,26 @@ def recognition_ranking(
         np.array(expected)[rank],
         current,
     )
+
+
+def _outcomes_apart(
+    out: Outcomes, rows: np.ndarray, members: np.ndarray, sensor: SensorBounds
+) -> np.ndarray:
+    """(n,) for each candidate of `rows`, how far apart the nominal outcomes of the
+    hypotheses `members` lie: the largest over pairs of the contacts' distance in
+    position bounds plus their normals' angle in normal bounds (a hit against a
+    miss counts as far as anything can be). Where they coincide within the bounds
+    no contact tells them apart; where they lie far apart one may."""
+    hit = out.hit[np.ix_(rows, members)]  # (n, k)
+    point = np.nan_to_num(out.point[np.ix_(rows, members)])  # (n, k, 2)
+    normal = np.nan_to_num(out.normal[np.ix_(rows, members)])
+    gap = np.linalg.norm(point[:, :, None] - point[:, None], axis=-1)
+    turn = np.arccos(np.clip(np.einsum("nkd,njd->nkj", normal, normal), -1.0, 1.0))
+    far = gap / max(sensor.position_error, LENGTH_SLACK) + turn / max(sensor.normal_error, 1e-3)
+    both = hit[:, :, None] & hit[:, None]
+    either = hit[:, :, None] ^ hit[:, None]
+    apart = np.where(either, np.inf, np.where(both, far, 0.0))
+    return apart.max(axis=(1, 2)) if len(members) else np.zeros(len(rows))
 
 
 #: Faces of a hypothesis counted as one in the cost of an update: an outline of

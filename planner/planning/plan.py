@@ -233,7 +233,9 @@ def _uninformative(
     if session is not None:
         paths, note = _by_recognition(found, session, ranking, config, budget)
     if not paths:
-        paths, note = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+        # the recognition's note says why nothing changes the classes; keep it
+        paths, refined = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+        note = refined if paths else note
     return paths, note
 
 

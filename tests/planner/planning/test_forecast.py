@@ -121,3 +121,62 @@ def test_a_weak_best_path_gives_way_to_the_recognitions_ranking():
     assert first.scored_by == "recognition"
     assert "changes the hypotheses with probability" in (found.note or "")
     assert first.p_forecast is not None and first.p_forecast > 0.5
+
+
+def test_outcomes_apart_measures_in_error_bounds():
+    from types import SimpleNamespace
+
+    from planner.planning.forecast import _outcomes_apart
+
+    nan = np.nan
+    out = SimpleNamespace(
+        hit=np.array([[True, True], [True, False], [False, False], [True, True]]),
+        point=np.array(
+            [
+                [[0.0, 0.0], [3.0, 0.0]],
+                [[0.0, 0.0], [nan, nan]],
+                [[nan, nan], [nan, nan]],
+                [[1.0, 1.0], [1.0, 1.0]],
+            ]
+        ),
+        normal=np.array(
+            [
+                [[1.0, 0.0], [1.0, 0.0]],
+                [[1.0, 0.0], [nan, nan]],
+                [[nan, nan], [nan, nan]],
+                [[1.0, 0.0], [0.0, 1.0]],
+            ]
+        ),
+    )
+    apart = _outcomes_apart(out, np.arange(4), np.array([0, 1]), SensorBounds(1.0, 0.1))
+    np.testing.assert_allclose(apart[[0, 2, 3]], [3.0, 0.0, (math.pi / 2) / 0.1])
+    assert apart[1] == np.inf  # a hit against a miss
+
+
+def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monkeypatch):
+    """The recognition judges `SHORTLIST` paths, and more (up to SHORTLIST_ROUNDS
+    times as many) while none of them is predicted to change the classes."""
+    from planner.planning import forecast
+    from planner.planning.analysis import analyse
+
+    session = _ellipse_touched_three_times()
+    found = analyse(
+        session.hypotheses, session.models, session.working_sensor, session.workspace,
+        (174.08, -98.46), StrategyConfig(),
+    )  # fmt: skip
+    current = found.posed.n_classes
+    judged: list[int] = []
+
+    def classes_after(session, path, out, c, h):
+        if c not in judged:
+            judged.append(c)
+        return 1 if len(judged) > forecast.SHORTLIST + 2 else current
+
+    monkeypatch.setattr(forecast, "_classes_after", classes_after)
+    ranking = forecast.recognition_ranking(session, found)
+    assert len(judged) == forecast.SHORTLIST + 3
+    assert ranking.expected_classes[0] < current
+    # when the first paths already change something, no more are judged
+    judged.clear()
+    monkeypatch.setattr(forecast, "_classes_after", lambda *a: 1)
+    assert len(forecast.recognition_ranking(session, found).rows) == forecast.SHORTLIST
