@@ -347,8 +347,9 @@ def _refining_by_recognition(
     ][: config.max_paths]
     if not paths:
         return [], (
-            "one class left, its bound short of the required accuracy; the recognition "
-            f"predicts no smaller bound after any of the {len(judged.rows)} paths it judged"
+            "one class left, its bound short of the required accuracy; no path shrinks its "
+            "bound further: the recognition predicts no smaller bound after any of the "
+            f"{len(judged.rows)} paths it judged"
         )
     first = np.flatnonzero(useful)[0]
     note = (
