@@ -85,12 +85,9 @@ def forecast_distinguishing(
     for k, row in zip(cls[first], first, strict=True):
         if budget.exhausted():
             return None
-        contact = None
-        if out.hit[0, row]:
-            contact = Contact(tuple(out.point[0, row]), tuple(out.normal[0, row]))
-        after = session.observe(Observation(path, contact)).hypotheses
+        after = _observed(session, path, out, 0, int(row))
         budget.spend_updates(1, size)
-        if len({h.equivalence_class for h in after}) == 1:
+        if after is not None and len({h.equivalence_class for h in after.hypotheses}) == 1:
             total += float(weight[k])
     return min(total / float(weight.sum()), 1.0)
 
@@ -236,31 +233,37 @@ def update_size(session: Session) -> float:
     return float(np.maximum(1.0, np.asarray(faces, dtype=float) / FACES_PER_HYPOTHESIS).sum())
 
 
-def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:
-    """Classes left once the session observes hypothesis `h`'s nominal outcome on
-    candidate `c` (0 when the predicted observation is not a valid one)."""
+def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> Session | None:
+    """The session once it observes hypothesis `h`'s nominal outcome on candidate
+    `c` (the first hit with its posed face normal, or a miss); None when that is
+    not a valid observation."""
     contact = None
     if out.hit[c, h]:
         contact = Contact(tuple(out.point[c, h]), tuple(out.normal[c, h]))
     try:
-        after = session.observe(Observation(path, contact)).hypotheses
+        return session.observe(Observation(path, contact))
     except InvalidObservationError:
-        return 0
-    return len({g.equivalence_class for g in after})
+        return None
+
+
+def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:
+    """Classes left once the session observes hypothesis `h`'s nominal outcome on
+    candidate `c` (0 when the predicted observation is not a valid one)."""
+    after = _observed(session, path, out, c, h)
+    return 0 if after is None else len({g.equivalence_class for g in after.hypotheses})
 
 
 @dataclass(frozen=True, eq=False)
 class RefiningPrediction:
     """What the recognition predicts of shortlisted refining paths `rows` (best
-    first) for a session with one class left: the class' bound after each path's
-    predicted contact (`translation`, `rotation`, `eps_t`), and whether it would
-    be within the session's accuracy (`admitted`); `current` the bound now."""
+    first: within the session's accuracy, then the smaller bound) for a session
+    with one class left: the class' bound after each path's predicted contact
+    (`translation`, `rotation`, `eps_t`); `current` the bound now."""
 
     rows: np.ndarray
     translation: np.ndarray
     rotation: np.ndarray
     eps_t: np.ndarray
-    admitted: np.ndarray
     current: tuple[float, float]
 
 
@@ -294,14 +297,10 @@ def recognition_refining(
     for c in shortlist:
         if judged and budget.exhausted():
             break
-        contact = Contact(tuple(out.point[c, best]), tuple(out.normal[c, best]))
-        try:
-            after = session.observe(Observation(cands.path(int(c)), contact))
-        except InvalidObservationError:
-            continue
+        after = _observed(session, cands.path(int(c)), out, int(c), best)
         budget.spend_updates(1, size)
-        where = after.localization
-        if where.bound is None or where.classes != 1:
+        where = None if after is None else after.localization
+        if where is None or where.bound is None or where.classes != 1:
             continue
         b = where.bound
         judged.append(
@@ -309,11 +308,11 @@ def recognition_refining(
         )
     if not judged:
         none = np.zeros(0)
-        return RefiningPrediction(none.astype(int), none, none, none, none.astype(bool), current)
+        return RefiningPrediction(none.astype(int), none, none, none, current)
     c, t, r, e, ok = (np.array(v) for v in zip(*judged, strict=True))
     share = t / accuracy.translation + r / accuracy.rotation
     order = np.lexsort((found.motion[c], share, ~ok))
-    return RefiningPrediction(c[order], t[order], r[order], e[order], ok[order], current)
+    return RefiningPrediction(c[order], t[order], r[order], e[order], current)
 
 
 def _constraint_gain(
@@ -329,11 +328,11 @@ def _constraint_gain(
         arm = p - centre
         return np.column_stack([n, (arm[:, 0] * n[:, 1] - arm[:, 1] * n[:, 0]) / scale])
 
-    known = [(c.point, c.normal) for c in session.contacts]
-    base = np.zeros((3, 3))
-    if known:
-        j = rows(np.array([k[0] for k in known]), np.array([k[1] for k in known]))
-        base = j.T @ j
+    contacts = session.contacts
+    known = rows(
+        np.array([c.point for c in contacts], dtype=float).reshape(-1, 2),
+        np.array([c.normal for c in contacts], dtype=float).reshape(-1, 2),
+    )
     new = rows(points, normals)
-    normal_eq = base[None] + new[:, :, None] * new[:, None, :]
+    normal_eq = (known.T @ known)[None] + new[:, :, None] * new[:, None, :]
     return np.linalg.eigvalsh(normal_eq)[:, 0]
