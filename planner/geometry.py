@@ -20,6 +20,7 @@ __all__ = [
     "point_segment_distance",
     "polygon_centroid",
     "ring_faces",
+    "rotate",
     "rotation_matrix",
     "segment_segment_distance",
     "signed_area",
@@ -73,6 +74,24 @@ def rotation_matrices(theta: np.ndarray) -> np.ndarray:
     np.sin(theta, out=out[..., 1, 0])
     out[..., 1, 1] = out[..., 0, 0]
     np.negative(out[..., 1, 0], out=out[..., 0, 1])
+    return out
+
+
+def rotate(rot: np.ndarray, points: np.ndarray) -> np.ndarray:
+    """``R v`` for each rotation `rot` (N, 2, 2) and points (P, 2), the same for all,
+    or (N, P, 2), one set each: (N, P, 2). Two products and a sum per coordinate,
+    the numbers ``einsum("nij,npj->npi")`` gives, at a fraction of its time
+    (which loops without vectorizing over so small a contraction).
+
+    >>> rotate(rotation_matrices(np.array([0.0, math.pi / 2])), np.array([[1.0, 0.0]])).round(12)
+    array([[[1., 0.]],
+    <BLANKLINE>
+           [[0., 1.]]])
+    """
+    x, y = points[..., 0], points[..., 1]
+    out = np.empty((len(rot), points.shape[-2], 2))
+    out[..., 0] = rot[:, 0, 0, None] * x + rot[:, 0, 1, None] * y
+    out[..., 1] = rot[:, 1, 0, None] * x + rot[:, 1, 1, None] * y
     return out
 
 

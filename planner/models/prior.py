@@ -16,7 +16,7 @@ from collections.abc import Sequence
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.geometry import LENGTH_SLACK, rotation_matrices
+from planner.geometry import LENGTH_SLACK, rotate, rotation_matrices
 from planner.types import ObjectModel, StablePose, Workspace
 
 __all__ = ["draw_poses", "draw_stable_poses"]
@@ -62,7 +62,7 @@ def draw_poses(
         theta = rng.uniform(-np.pi, np.pi, m)
         r, a = R * np.sqrt(rng.random(m)), rng.uniform(-np.pi, np.pi, m)
         t = r[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)  # relative to the centre
-        posed = np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
+        posed = rotate(rotation_matrices(theta), stable.outline) + t[:, None]
         ok = np.all(np.hypot(posed[..., 0], posed[..., 1]) <= R * (1 - LENGTH_SLACK), axis=1)
         theta_out.append(theta[ok])
         t_out.append(t[ok] + centre)

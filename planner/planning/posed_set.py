@@ -16,7 +16,7 @@ from functools import cached_property
 import numpy as np
 
 from planner.errors import PlannerError
-from planner.geometry import rotation_matrices
+from planner.geometry import rotate, rotation_matrices
 from planner.types import Hypothesis, ObjectModel
 
 __all__ = ["CHUNK_ELEMENTS", "PosedSet", "contains_points", "pose_hypotheses"]
@@ -110,9 +110,9 @@ def pose_hypotheses(
     shift = np.array([[h.pose.x, h.pose.y] for h in hypotheses])
     rot = rotation_matrices(theta)
     # v_world = R(theta) v_model + t
-    start = np.einsum("hij,hfj->hfi", rot, m_start[model_of]) + shift[:, None, :]
-    end = np.einsum("hij,hfj->hfi", rot, m_end[model_of]) + shift[:, None, :]
-    normal = np.einsum("hij,hfj->hfi", rot, m_normal[model_of])
+    start = rotate(rot, m_start[model_of]) + shift[:, None, :]
+    end = rotate(rot, m_end[model_of]) + shift[:, None, :]
+    normal = rotate(rot, m_normal[model_of])
     weight = np.array([max(h.probability, 0.0) for h in hypotheses], dtype=float)
     total = weight.sum()
     if not math.isfinite(total) or total <= 0:
@@ -150,7 +150,7 @@ def _touched(
     for m, pose in enumerate(poses):
         mine = np.flatnonzero(model_of == m)
         normals = pose.all_faces.normal[np.maximum(assigned[mine], 0)]  # (k, s, 2)
-        out[mine] = np.einsum("kij,ksj->ksi", rot[mine], normals)
+        out[mine] = rotate(rot[mine], normals)
     out[assigned < 0] = np.nan
     return out
 

@@ -17,7 +17,7 @@ from typing import TYPE_CHECKING
 import numpy as np
 
 from planner.errors import PlanningNotPossibleError
-from planner.geometry import LENGTH_SLACK, rotation_matrices
+from planner.geometry import LENGTH_SLACK, rotate, rotation_matrices
 from planner.models.prior import draw_poses, draw_stable_poses
 from planner.planning.candidates import Candidates, paths_through
 from planner.planning.intersection_aims import union_centre
@@ -187,9 +187,7 @@ def _prior_draws(
             stable = items[i].stable_poses[j]
             theta, t = draw_poses(stable, workspace, n, rng)
             # v_world = R(theta) v + t
-            groups.append(
-                np.einsum("nij,vj->nvi", rotation_matrices(theta), stable.outline) + t[:, None]
-            )
+            groups.append(rotate(rotation_matrices(theta), stable.outline) + t[:, None])
         if len(_DRAWS) >= 16:
             _DRAWS.pop(next(iter(_DRAWS)))
         _DRAWS[key] = (items, groups)

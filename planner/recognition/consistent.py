@@ -21,7 +21,14 @@ import numba
 import numpy as np
 
 from planner.compiled import c_array
-from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, SHARE_SLACK, rotation_matrices, wrap_angle
+from planner.geometry import (
+    ANGLE_SLACK,
+    LENGTH_SLACK,
+    SHARE_SLACK,
+    rotate,
+    rotation_matrices,
+    wrap_angle,
+)
 
 __all__ = ["ConsistentSet", "consistent_poses", "consistent_set_bounds", "consistent_volume"]
 
@@ -139,7 +146,7 @@ def _sweep(
     ok &= ~empty_range[:, None, None]
     # displacement of each model point: R' v + t' - (R v + t), largest over the vertices
     model_points = c_array(model_points, dtype=float)
-    fit_pts = np.einsum("kij,pj->kpi", rotation_matrices(theta), model_points) + t[:, None, :]
+    fit_pts = rotate(rotation_matrices(theta), model_points) + t[:, None, :]
     norm = np.full((len(theta), len(model_points)), -np.inf)
     _largest_moves(
         c_array(vx), c_array(vy), c_array(ok),

@@ -53,7 +53,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.spatial import cKDTree
 
-from planner.geometry import rotation_matrices
+from planner.geometry import rotate, rotation_matrices
 from planner.recognition.outline_kernel import nearest_face_distances, pair_outline_distances
 from planner.types import StablePose
 
@@ -138,7 +138,7 @@ class PosedRings:
         t = np.asarray(t, dtype=float).reshape(-1, 2)
 
         def move(points: np.ndarray) -> np.ndarray:
-            return np.einsum("nij,vj->nvi", R, points) + t[:, None, :]
+            return rotate(R, points) + t[:, None, :]
 
         faces = stable.faces
         a, b = np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float)
@@ -159,7 +159,7 @@ class PosedRings:
         """World points (M, P, 2) into the model frame of hypotheses `rows` (M,):
         ``v_model = R(theta)^T (v_world - t)``."""
         R = rotation_matrices(self.theta[rows])
-        return np.einsum("mji,mpj->mpi", R, points - self.t[rows, None, :])
+        return rotate(R.transpose(0, 2, 1), points - self.t[rows, None, :])
 
 
 def _along(a: np.ndarray, b: np.ndarray, steps: np.ndarray, *, ends: bool) -> np.ndarray:

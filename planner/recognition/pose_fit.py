@@ -29,7 +29,7 @@ from dataclasses import dataclass
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
-from planner.geometry import SHARE_SLACK, rotation_matrices
+from planner.geometry import SHARE_SLACK, rotate, rotation_matrices
 
 __all__ = ["FitBatch", "PoseFilter", "fit_batch", "lifted_rows", "noise_scales"]
 
@@ -286,7 +286,7 @@ def point_bounds(
     rows = np.arange(len(fit.theta)) if rows is None else rows
     R = rotation_matrices(fit.theta[rows])
     points = np.broadcast_to(points, (len(rows), *points.shape[-2:]))
-    arm = np.einsum("kij,jl,kpl->kpi", R, _J, points)  # (N, P, 2)
+    arm = rotate(R @ _J, points)  # (N, P, 2): R J v
     s_theta = fit.sens[rows, :, 2, :]  # (N, s, 3)
     s_v = fit.sens_origin[rows][:, :, None] + (
         arm[:, None, :, :, None] * s_theta[:, :, None, None, :]

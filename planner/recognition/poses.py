@@ -21,7 +21,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.geometry import ANGLE_SLACK, rotation_matrices, wrap_angle
+from planner.geometry import ANGLE_SLACK, rotate, rotation_matrices, wrap_angle
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.consistent import consistent_set_bounds
 from planner.recognition.pose_fit import (
@@ -104,7 +104,7 @@ def fit_poses(
     R = rotation_matrices(fit.theta)
     rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
     e = faces.normal[face[np.arange(len(face)), np.argmax(assigned, 1)]] @ _TURN.T
-    m0 = np.einsum("kji,ksj->ksi", R, points[None] - fit.t[:, None, :])  # contacts' model points
+    m0 = rotate(R.transpose(0, 2, 1), points[None] - fit.t[:, None, :])  # contacts' model points
     return PoseFit(fit=fit, sigma_d=sigma_d, slide_axis=e, rho=rho, model_points=m0)
 
 

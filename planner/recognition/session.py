@@ -198,11 +198,13 @@ class Session:
         parent_level: TreeLevel | None
         if self._parent is not None:
             parent_level = self._parent._derived.level
+        elif not self.observations:
+            parent_level = None
         else:
             prefix = Session(self.given_models, self.sensor, self.workspace, self.config)
             for obs in self.observations[:-1]:
                 prefix = prefix.observe(obs)
-            parent_level = prefix._derived.level if self.observations else None
+            parent_level = prefix._derived.level
         if parent_level is None:  # no observation at all
             empty = tuple(np.zeros((1, 0), np.int64) for _ in self._groups)
             return _Derived(TreeLevel(rows=empty), ())
