@@ -14,7 +14,7 @@ import numpy as np
 
 from hardware_sim.world import random_world
 from planner.planning.config import StrategyConfig
-from planner.planning.plan import plan
+from planner.planning.plan import plan_session
 from planner.recognition.session import Session
 from planner.types import ObjectModel, SensorBounds, Workspace
 
@@ -132,7 +132,9 @@ def planning_stats(
     repeat: int = 1,
 ) -> list[PlanningStats]:
     """Plan times after 0, 1, ..., `touches` random touches of random true objects,
-    each strategy at its default settings (sensor at the safe circle's +x point).
+    each strategy at its default settings (sensor at the safe circle's +x point), as
+    the service plans: :func:`~planner.planning.plan.plan_session`, its forecast and
+    the recognition's predictions included.
 
     >>> from planner.models.library import object_from_dict
     >>> sq = object_from_dict({"name": "sq", "outline": [[-9, -9], [9, -9], [9, 9], [-9, 9]]})
@@ -163,16 +165,7 @@ def planning_stats(
                 runs = []
                 for _ in range(repeat):
                     start = time.perf_counter()
-                    result = plan(
-                        found,
-                        models,
-                        bounds,
-                        workspace,
-                        where,
-                        config,
-                        seed + trial,
-                        observations=session.observations,
-                    )
+                    result = plan_session(session, where, config, seed + trial)
                     runs.append(1e3 * (time.perf_counter() - start))
                 times[name][k, trial] = float(np.median(runs))
                 cut[name][k, trial] = result.truncated

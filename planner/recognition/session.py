@@ -271,24 +271,37 @@ class Session:
         rank = np.empty(len(class_prob), np.int64)
         rank[np.argsort(-class_prob, kind="stable")] = np.arange(len(class_prob))
         out = []
-        i = 0
         level = self._derived.level
+        # Python numbers first: one conversion per array, not one per element
+        probs, labels = prob.tolist(), rank[classes].tolist()
+        i = 0
         for c in cands:
             group = self._groups[c.group]
-            rows = level.rows[c.group]
-            for k in range(len(c.weight)):
+            assignments = [
+                tuple(row) if min(row, default=0) >= 0 else tuple(_face_or_none(row))
+                for row in level.rows[c.group][c.row].tolist()
+            ]
+            columns = zip(
+                c.t.tolist(),
+                c.theta.tolist(),
+                c.d_translation.tolist(),
+                c.d_theta.tolist(),
+                c.eps_t.tolist(),
+                c.row.tolist(),
+                assignments,
+                strict=True,
+            )
+            for (x, y), theta, d_t, d_theta, eps_t, row, assignment in columns:
                 out.append(
                     Hypothesis(
                         object=group.model.name,
                         stable_pose=group.pose_index,
-                        assignment=tuple(int(f) if f >= 0 else None for f in rows[c.row[k]]),
-                        pose=Pose(float(c.t[k, 0]), float(c.t[k, 1]), float(c.theta[k])),
-                        error_bound=ErrorBound(
-                            float(c.d_translation[k]), float(c.d_theta[k]), float(c.eps_t[k])
-                        ),
-                        probability=float(prob[i]),
-                        equivalence_class=int(rank[classes[i]]),
-                        interpretation=InterpretationId(c.group, int(c.row[k])),
+                        assignment=assignment,
+                        pose=Pose(x, y, theta),
+                        error_bound=ErrorBound(d_t, d_theta, eps_t),
+                        probability=probs[i],
+                        equivalence_class=labels[i],
+                        interpretation=InterpretationId(c.group, row),
                     )
                 )
                 i += 1
@@ -387,6 +400,11 @@ def _reindex(c: PoseSamples, rows: np.ndarray) -> PoseSamples:
     return PoseSamples(
         c.group, rows, c.theta, c.t, c.d_translation, c.d_theta, c.eps_t, c.cell, c.weight
     )
+
+
+def _face_or_none(row: list[int]) -> list[int | None]:
+    """A row of the tree as a hypothesis' assignment: None for a spurious contact."""
+    return [f if f >= 0 else None for f in row]
 
 
 def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:
