@@ -25,6 +25,9 @@ from __future__ import annotations
 
 import dataclasses
 import time
+from collections.abc import Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from dataclasses import dataclass
 
 import numpy as np
@@ -46,6 +49,7 @@ __all__ = [
     "RecognitionRanking",
     "RefiningPrediction",
     "forecast_distinguishing",
+    "predictions",
     "recognition_ranking",
     "recognition_refining",
     "update_size",
@@ -233,17 +237,42 @@ def update_size(session: Session) -> float:
     return float(np.maximum(1.0, np.asarray(faces, dtype=float) / FACES_PER_HYPOTHESIS).sum())
 
 
+#: The sessions predicted during one plan, by the session and what it observed:
+#: hypotheses of equal pose (twins told apart elsewhere; classes that all miss)
+#: predict the same observation, and one update serves them all. Set by
+#: :func:`predictions` for the length of a plan, so nothing outlives it.
+_PREDICTED: ContextVar[dict | None] = ContextVar("predicted", default=None)
+
+
+@contextmanager
+def predictions() -> Iterator[None]:
+    """Within it, a predicted observation is observed once (:func:`_observed`)."""
+    token = _PREDICTED.set({})
+    try:
+        yield
+    finally:
+        _PREDICTED.reset(token)
+
+
 def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> Session | None:
     """The session once it observes hypothesis `h`'s nominal outcome on candidate
     `c` (the first hit with its posed face normal, or a miss); None when that is
     not a valid observation."""
     contact = None
     if out.hit[c, h]:
-        contact = Contact(tuple(out.point[c, h]), tuple(out.normal[c, h]))
+        contact = Contact(tuple(out.point[c, h].tolist()), tuple(out.normal[c, h].tolist()))
+    observation = Observation(path, contact)
+    memo = _PREDICTED.get()
+    key = (session, observation)
+    if memo is not None and key in memo:
+        return memo[key]
     try:
-        return session.observe(Observation(path, contact))
+        after: Session | None = session.observe(observation)
     except InvalidObservationError:
-        return None
+        after = None
+    if memo is not None:
+        memo[key] = after
+    return after
 
 
 def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:

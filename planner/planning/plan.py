@@ -25,7 +25,12 @@ from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import recognition_ranking, recognition_refining, with_forecast
+from planner.planning.forecast import (
+    predictions,
+    recognition_ranking,
+    recognition_refining,
+    with_forecast,
+)
 from planner.planning.probes import opening_probe
 from planner.planning.refinement import refinement, scores_after
 from planner.planning.representatives import face_counts, representatives
@@ -62,7 +67,16 @@ def plan_session(
 ) -> Plan:
     """:func:`plan` on a session's state, its first
     `config.forecast` paths forecast within the same budget."""
-    config = config or StrategyConfig()
+    with predictions():  # one update per distinct predicted observation
+        return _plan_session(session, sensor_position, config or StrategyConfig(), rng)
+
+
+def _plan_session(
+    session: Session,
+    sensor_position: Sequence[float],
+    config: StrategyConfig,
+    rng: np.random.Generator | int | None,
+) -> Plan:
     total = config.budget_work
     # the forecast (the probability to act on) keeps its share of the work: the search
     # may not spend it, and the forecast may spend what the search left

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import math
 
@@ -11,9 +12,10 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from planner.codec import plan_to_dict
+from planner.planning import plan as plan_module
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import forecast_distinguishing, with_forecast
+from planner.planning.forecast import _observed, forecast_distinguishing, predictions, with_forecast
 from planner.planning.plan import plan_session
 from planner.recognition.session import Session
 from planner.types import SensingPath, SensorBounds
@@ -180,3 +182,20 @@ def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monke
     judged.clear()
     monkeypatch.setattr(forecast, "_classes_after", lambda *a: 1)
     assert len(forecast.recognition_ranking(session, found).rows) == forecast.SHORTLIST
+
+
+def test_a_predicted_observation_is_observed_once_per_plan(monkeypatch):
+    session = touched("thesis_like", BOUNDS[1], 3, 2)
+    found = analysed(session)
+    path = found.candidates.path(0)
+    with predictions():
+        first = _observed(session, path, found.outcomes, 0, 0)
+        assert _observed(session, path, found.outcomes, 0, 0) is first
+    again = _observed(session, path, found.outcomes, 0, 0)  # no plan: no memo
+    assert again is not first and again.hypotheses == first.hypotheses
+    # the memo saves updates, never changes a plan
+    config = StrategyConfig(forecast=3)
+    remembered = plan_session(session, SENSOR, config, 0)
+    monkeypatch.setattr(plan_module, "predictions", contextlib.nullcontext)
+    forgotten = plan_session(session, SENSOR, config, 0)
+    assert remembered.paths == forgotten.paths and remembered.work == forgotten.work
