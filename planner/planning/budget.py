@@ -85,6 +85,23 @@ class Budget:
         self.spend("recognition_update", count)
         self.spend("recognition_hypothesis", count * hypotheses)
 
+    def affords_updates(self, count: int, hypotheses: float) -> bool:
+        """Whether all of `count` recognition updates of a session carrying
+        `hypotheses` hypotheses would start within the work budget (each starts
+        while the units spent are within it). A stage that is worth nothing unless
+        it finishes asks first; when the answer is no, the budget counts as stopped
+        by work, as if the stage had run out, and no work is spent on it.
+
+        >>> b = Budget(work=20_000)
+        >>> b.affords_updates(3, 10.0), b.affords_updates(4, 10.0), b.stopped_by
+        (True, False, 'work')
+        """
+        each = UNIT_US["recognition_update"] + hypotheses * UNIT_US["recognition_hypothesis"]
+        if self.units + max(count - 1, 0) * each <= self.work:
+            return True
+        self.stopped_by = self.stopped_by or "work"
+        return False
+
     def exhausted(self) -> bool:
         """True once the work is spent or the cap passed (and from then on)."""
         if self.stopped_by is None:

@@ -16,7 +16,8 @@ or a miss); the session observes that outcome; the touch is distinguishing
 when one class is left. ``p_forecast = sum_k w(k) [one class left | k's
 outcome]``, the class weights being the session's probabilities. One
 recognition update per class, so it is offered for the first few ranked
-paths only, and stops when the plan's budget is spent.
+paths only, and only when the plan's budget can pay for every class: a
+forecast cut short says nothing, so it is not begun.
 
 World frame, lengths in the object files' unit.
 """
@@ -86,6 +87,8 @@ def forecast_distinguishing(
     # hypotheses come most probable first: each class' first row is its best member
     _, first = np.unique(cls, return_index=True)
     total, size = 0.0, update_size(session)
+    if not budget.affords_updates(len(first), size):
+        return None  # it would stop before the last class: not even started
     for k, row in zip(cls[first], first, strict=True):
         if budget.exhausted():
             return None

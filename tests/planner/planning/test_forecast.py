@@ -13,9 +13,15 @@ from hypothesis import strategies as st
 
 from planner.codec import plan_to_dict
 from planner.planning import plan as plan_module
-from planner.planning.budget import Budget
+from planner.planning.budget import UNIT_US, Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import _observed, forecast_distinguishing, predictions, with_forecast
+from planner.planning.forecast import (
+    _observed,
+    forecast_distinguishing,
+    predictions,
+    update_size,
+    with_forecast,
+)
 from planner.planning.plan import plan_session
 from planner.recognition.session import Session
 from planner.types import SensingPath, SensorBounds
@@ -199,3 +205,19 @@ def test_a_predicted_observation_is_observed_once_per_plan(monkeypatch):
     monkeypatch.setattr(plan_module, "predictions", contextlib.nullcontext)
     forgotten = plan_session(session, SENSOR, config, 0)
     assert remembered.paths == forgotten.paths and remembered.work == forgotten.work
+
+
+def test_a_forecast_the_budget_cannot_finish_is_not_begun():
+    session = touched("thesis_like", BOUNDS[1], 3, 2)
+    classes = len({h.equivalence_class for h in session.hypotheses})
+    assert classes > 2
+    path = analysed(session).candidates.path(0)
+    whole = forecast_distinguishing(session, path)
+    each = UNIT_US["recognition_update"] + update_size(session) * UNIT_US["recognition_hypothesis"]
+    # the last class' update starts within the budget: the forecast is made
+    enough = Budget(work=(classes - 1) * each + 1.0)
+    assert forecast_distinguishing(session, path, enough) == whole
+    # one class short: nothing is spent on a forecast that would say nothing
+    short = Budget(work=(classes - 1) * each - 1.0)
+    assert forecast_distinguishing(session, path, short) is None
+    assert short.units == 0.0 and short.stopped_by == "work"
