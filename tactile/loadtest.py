@@ -55,20 +55,32 @@ MODES = {"recognize": "Robot", "observe": "Prober"}
 _TICK = os.sysconf("SC_CLK_TCK") if hasattr(os, "sysconf") else 100
 
 
-def cpu_seconds(pid: int) -> float:
-    """CPU time (user + system) of process `pid` and its living children (Linux /proc;
-    0 elsewhere): a server's workers are its children."""
-    total = 0.0
-    proc = Path("/proc")
-    for stat in proc.glob("[0-9]*/stat"):
+def process_cpu(pid: int) -> dict[int, float]:
+    """CPU time (user + system, s) of process `pid` and of each of its living children,
+    by process id (Linux /proc; empty elsewhere): a server's workers are its children."""
+    out = {}
+    for stat in Path("/proc").glob("[0-9]*/stat"):
         try:
             fields = stat.read_text().rsplit(")", 1)[1].split()
         except OSError:
             continue
         this, parent = int(stat.parent.name), int(fields[1])
         if pid in (this, parent):
-            total += (int(fields[11]) + int(fields[12])) / _TICK
-    return total
+            out[this] = (int(fields[11]) + int(fields[12])) / _TICK
+    return out
+
+
+def cpu_seconds(pid: int) -> float:
+    """CPU time (user + system) of process `pid` and its living children."""
+    return sum(process_cpu(pid).values())
+
+
+def worker_cpu(before: dict[int, float], after: dict[int, float], server: int) -> list[float]:
+    """CPU seconds each worker of `server` spent between two :func:`process_cpu`
+    readings, most first: how evenly the workers shared the load (keep-alive
+    connections stay on the worker that accepted them)."""
+    spent = [t - before.get(p, 0.0) for p, t in after.items() if p != server]
+    return sorted((round(s, 1) for s in spent), reverse=True)
 
 
 def _serve(port: int, workers: int, db: str) -> subprocess.Popen[bytes]:
@@ -109,6 +121,20 @@ def _endpoints(prefix: Path) -> dict[str, dict]:
     }
 
 
+def _per_host(endpoints: dict[str, dict], hosts: int) -> dict[str, dict]:
+    """Requests, requests/s and failures per host (endpoints named ``... @h<i>``
+    when there are several)."""
+    out = {}
+    for h in range(hosts):
+        mine = [e for name, e in endpoints.items() if hosts == 1 or name.endswith(f"@h{h}")]
+        out[f"h{h}"] = {
+            "requests": sum(e["requests"] for e in mine),
+            "rps": round(sum(e["rps"] for e in mine), 2),
+            "failures": sum(e["failures"] for e in mine),
+        }
+    return out
+
+
 def run(
     workers: int,
     users: int,
@@ -139,7 +165,7 @@ def run(
                 "LOADTEST_KEEPALIVE": "1" if keepalive else "0",
                 "LOADTEST_HOSTS": ",".join(urls) if hosts > 1 else "",
             }
-            cpu_before = [cpu_seconds(s.pid) for s in servers]
+            cpu_before = [process_cpu(s.pid) for s in servers]
             subprocess.run(
                 [
                     str(bin_dir / "locust"),
@@ -168,7 +194,15 @@ def run(
                 stderr=subprocess.DEVNULL,
                 env=env,
             )
-            cpu = [cpu_seconds(s.pid) - b for s, b in zip(servers, cpu_before, strict=True)]
+            cpu_after = [process_cpu(s.pid) for s in servers]
+            cpu = [
+                sum(a.values()) - sum(b.values())
+                for a, b in zip(cpu_after, cpu_before, strict=True)
+            ]
+            workers_cpu = [
+                worker_cpu(b, a, s.pid)
+                for s, b, a in zip(servers, cpu_before, cpu_after, strict=True)
+            ]
         finally:
             for server in servers:
                 server.terminate()
@@ -176,20 +210,15 @@ def run(
                 server.wait(timeout=30)
     endpoints = _endpoints(prefix)
     failures = sum(e["failures"] for e in endpoints.values())
-    per_host = {}
-    for h in range(hosts):
-        mine = [e for name, e in endpoints.items() if hosts == 1 or name.endswith(f"@h{h}")]
-        per_host[f"h{h}"] = {
-            "requests": sum(e["requests"] for e in mine),
-            "rps": round(sum(e["rps"] for e in mine), 2),
-            "failures": sum(e["failures"] for e in mine),
-        }
+    per_host = _per_host(endpoints, hosts)
     plans = sum(e["requests"] for name, e in endpoints.items() if "/plan" in name)
     touches = sum(e["requests"] for name, e in endpoints.items() if "/observations" in name)
     return {
         "mode": mode,
         "hosts": hosts,
         "server_cpu_s": round(sum(cpu), 2),
+        # per host, each worker's CPU seconds (one entry: the server is its only worker)
+        "worker_cpu_s": workers_cpu,
         # the servers' CPU per touch the robots made (each planned, then observed)
         "cpu_ms_per_touch": round(1e3 * sum(cpu) / max(touches, 1), 1),
         "plans": plans,
@@ -264,6 +293,9 @@ def main(argv: list[str] | None = None) -> int:
             f"  server CPU: {res['server_cpu_s']:.1f} s, {res['cpu_ms_per_touch']:.1f} ms"
             f" per touch ({'planned and ' if res['plans'] else ''}observed)"
         )
+        for h, spent in enumerate(res["worker_cpu_s"]):
+            if len(spent) > 1:  # several workers: how evenly they shared the robots
+                print(f"  host h{h} CPU per worker process: {' / '.join(map(str, spent))} s")
         print(f"  failed requests: {res['failures']}")
     return 1 if any(r["failures"] for r in results) else 0
 
