@@ -4,6 +4,9 @@ The listening socket is bound here, with ``TCP_NODELAY`` set on it (accepted
 connections inherit it on Linux), and handed to uvicorn: with several workers
 uvicorn passes its socket to the worker processes, which then lose
 TCP_NODELAY and add about 40 ms to each small response (uvicorn issue #3149).
+With several workers each gets a socket of its own on the same port
+(SO_REUSEPORT, :mod:`app.supervisor`), so that the kernel spreads connections
+over the workers instead of handing a burst of them to one.
 With several workers the settings reach the workers through the environment
 (``TACTILE_*``) and the metrics of all workers are aggregated through
 ``PROMETHEUS_MULTIPROC_DIR`` (a temporary folder unless one is given).
@@ -26,10 +29,12 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import TYPE_CHECKING, Any
 
+from app.supervisor import reuse_port_supported
+
 if TYPE_CHECKING:
     from app.settings import Settings
 
-__all__ = ["add_serve_command", "bind_socket", "cmd_serve", "serve_in_thread"]
+__all__ = ["add_serve_command", "bind_socket", "bind_sockets", "cmd_serve", "serve_in_thread"]
 
 #: uvicorn options shared by ``tactile serve`` and :func:`serve_in_thread`.
 UVICORN_OPTIONS: dict[str, Any] = {
@@ -41,12 +46,17 @@ UVICORN_OPTIONS: dict[str, Any] = {
 }
 
 
-def bind_socket(host: str, port: int, backlog: int = 2048) -> socket.socket:
-    """A listening TCP socket with SO_REUSEADDR and TCP_NODELAY (port 0: any free port)."""
+def bind_socket(
+    host: str, port: int, backlog: int = 2048, *, reuse_port: bool = False
+) -> socket.socket:
+    """A listening TCP socket with SO_REUSEADDR and TCP_NODELAY (port 0: any free port);
+    with `reuse_port`, SO_REUSEPORT too (sockets sharing the port share its connections)."""
     family = socket.AF_INET6 if ":" in host else socket.AF_INET
     sock = socket.socket(family, socket.SOCK_STREAM, socket.IPPROTO_TCP)
     try:
         sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        if reuse_port:
+            sock.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEPORT, 1)
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         sock.bind((host, port))
         sock.listen(backlog)
@@ -55,6 +65,20 @@ def bind_socket(host: str, port: int, backlog: int = 2048) -> socket.socket:
         raise
     sock.set_inheritable(True)
     return sock
+
+
+def bind_sockets(host: str, port: int, count: int) -> list[socket.socket]:
+    """`count` listening sockets on one address, one per worker
+    (:mod:`app.supervisor`): SO_REUSEPORT sockets, after a plain bind has found the
+    port free, so that a second service started on a taken port fails as it would
+    with one socket instead of silently sharing the first one's connections. One
+    plain socket when `count` is 1 or the system cannot share a port."""
+    if count <= 1 or not reuse_port_supported():
+        return [bind_socket(host, port)]
+    probe = bind_socket(host, port)  # OSError when the port is taken
+    port = int(probe.getsockname()[1])
+    probe.close()
+    return [bind_socket(host, port, reuse_port=True) for _ in range(count)]
 
 
 def _positive(text: str) -> int:
@@ -96,6 +120,7 @@ def cmd_serve(args: argparse.Namespace) -> int:
     from app.security import LOOPBACK_NAMES, is_loopback
     from app.settings import Settings
     from app.store_types import database_label, database_url, is_url
+    from app.supervisor import per_worker_supervisor
 
     if args.db is not None:
         database_url(args.db)  # refuse what no backend takes before anything starts
@@ -120,7 +145,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
     configure_logging(settings.log_level, settings.log_json)
     _memory_cap(settings.max_memory_bytes)
     _metrics_dir(args.workers)
-    sock = bind_socket(args.host, args.port)
+    sockets = bind_sockets(args.host, args.port, args.workers)
+    sock = sockets[0]
     host, port = sock.getsockname()[:2]
     common = dict(UVICORN_OPTIONS, limit_concurrency=settings.limit_concurrency)
     structlog.get_logger("app.serve").info(
@@ -135,6 +161,12 @@ def cmd_serve(args: argparse.Namespace) -> int:
     )
     if args.workers > 1:
         config = uvicorn.Config("app.main:create_app", factory=True, workers=args.workers, **common)
+        own = per_worker_supervisor(config, sockets) if len(sockets) == args.workers else None
+        if own is not None:  # each worker on its own socket: connections spread over them
+            own.run()
+            return 0
+        for extra in sockets[1:]:
+            extra.close()
         if "target" in inspect.signature(Multiprocess).parameters:  # older uvicorn
             server = uvicorn.Server(config)
             Multiprocess(config, target=server.run, sockets=[sock]).run()  # type: ignore[call-arg]

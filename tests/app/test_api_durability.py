@@ -14,8 +14,10 @@ import socket
 import threading
 
 import httpx
+import pytest
 
-from app.serve import bind_socket
+from app.serve import bind_socket, bind_sockets
+from app.supervisor import reuse_port_supported
 from tactile.server import Server
 from tests.app.api_support import BOTTOM, SQUARE, WORKSPACE, miss
 
@@ -101,3 +103,39 @@ def test_bound_socket_gives_accepted_connections_tcp_nodelay():
                 assert conn.getsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY)
     finally:
         listener.close()
+
+
+@pytest.mark.skipif(not reuse_port_supported(), reason="no SO_REUSEPORT here")
+def test_each_worker_socket_takes_its_share_and_the_port_stays_one_services():
+    # several workers listen on sockets of their own on one port: the kernel spreads
+    # new connections over them (one shared socket gave a burst of them to one worker)
+    listeners = bind_sockets("127.0.0.1", 0, 2)
+    try:
+        ports = {s.getsockname()[1] for s in listeners}
+        assert len(ports) == 1
+        port = ports.pop()
+        # a second service on the same port fails, as it does with one socket
+        with pytest.raises(OSError):
+            bind_sockets("127.0.0.1", port, 2)
+        with pytest.raises(OSError):
+            bind_socket("127.0.0.1", port)
+        clients = [socket.create_connection(("127.0.0.1", port)) for _ in range(32)]
+        taken = []
+        for listener in listeners:
+            listener.setblocking(False)
+            count = 0
+            while True:
+                try:
+                    conn, _ = listener.accept()
+                except BlockingIOError:
+                    break
+                conn.close()
+                count += 1
+            taken.append(count)
+        for c in clients:
+            c.close()
+        assert sum(taken) == 32
+        assert min(taken) > 0  # all on one socket: 2 chances in 2**32
+    finally:
+        for listener in listeners:
+            listener.close()
