@@ -70,11 +70,6 @@ def process_cpu(pid: int) -> dict[int, float]:
     return out
 
 
-def cpu_seconds(pid: int) -> float:
-    """CPU time (user + system) of process `pid` and its living children."""
-    return sum(process_cpu(pid).values())
-
-
 def worker_cpu(before: dict[int, float], after: dict[int, float], server: int) -> list[float]:
     """CPU seconds each worker of `server` spent between two :func:`process_cpu`
     readings, most first: how evenly the workers shared the load (keep-alive
@@ -217,7 +212,8 @@ def run(
         "mode": mode,
         "hosts": hosts,
         "server_cpu_s": round(sum(cpu), 2),
-        # per host, each worker's CPU seconds (one entry: the server is its only worker)
+        # per host, the CPU seconds of each process the server started (its workers;
+        # empty when the server is its only worker)
         "worker_cpu_s": workers_cpu,
         # the servers' CPU per touch the robots made (each planned, then observed)
         "cpu_ms_per_touch": round(1e3 * sum(cpu) / max(touches, 1), 1),
