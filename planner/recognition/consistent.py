@@ -30,7 +30,17 @@ from planner.geometry import (
     wrap_angle,
 )
 
-__all__ = ["ConsistentSet", "consistent_poses", "consistent_set_bounds", "consistent_volume"]
+__all__ = [
+    "MAX_FACES",
+    "ConsistentSet",
+    "consistent_poses",
+    "consistent_set_bounds",
+    "consistent_volume",
+    "latest_faces",
+]
+
+#: Faces whose contacts the likelihood's polygons hold at most (the latest touched).
+MAX_FACES = 8
 
 
 @dataclass(frozen=True, eq=False)
@@ -195,6 +205,7 @@ def consistent_volume(
     eps_d: float,
     phi: float,
     samples: int = 25,
+    max_faces: int = MAX_FACES,
 ) -> np.ndarray:
     """Volume (area x radians) of the set of poses consistent with the contacts,
     per row (K,): the bounded-error likelihood of the contacts up to a constant
@@ -206,20 +217,22 @@ def consistent_volume(
     line form a convex polygon (slabs), whose area is the shoelace sum of its
     vertices (the slab-edge crossings inside every slab) in angular order; the
     trapezoid rule integrates over theta'. 0 where nothing is consistent or
-    eps_d is 0; inf where two non-parallel faces are missing (unbounded)."""
+    eps_d is 0; inf where two non-parallel faces are missing (unbounded). Only the
+    contacts on the `max_faces` faces touched last count (:func:`latest_faces`)."""
     K, s = assigned.shape
     points = np.broadcast_to(points, (K, s, 2))
     normals = np.broadcast_to(normals, (K, s, 2))
     volume = np.zeros(K)
     if K == 0 or s < 2 or eps_d <= 0:
         return np.full(K, np.inf) if s < 2 else volume
+    assigned = latest_faces(face_normals, face_offsets, assigned, max_faces)
     lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
     # a chunk's largest arrays hold its contacts and the corner tests of the slabs:
     # one slab per face touched, however many contacts lie on it
     touched = np.unique(
         np.column_stack([face_offsets.ravel(), face_normals.reshape(-1, 2)]), axis=0
     )
-    g = min(s, len(touched))
+    g = min(s, len(touched), max_faces)
     chunk = max(1, 1_000_000 // (samples * (s + 2 * g**3)))
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))
@@ -253,23 +266,52 @@ def _face_groups(
     """Contacts of one hypothesis that lie on the same face (same posed line) give
     parallel slabs, whose intersection is one slab: their group id `gid` (K, S) and,
     per group (K, G), its face's normal and whether any contact of it is used. G is
-    at most the number of faces touched, however many contacts there are."""
+    at most the number of faces the USED contacts touch, however many contacts
+    there are (an unused contact joins group 0 and is skipped)."""
     K, S = use.shape
-    keys = (face_offsets, face_normals[..., 1], face_normals[..., 0])
+    big = np.inf
+    keys = (
+        np.where(use, face_offsets, big),
+        np.where(use, face_normals[..., 1], big),
+        np.where(use, face_normals[..., 0], big),
+    )
     order = np.lexsort(keys, axis=-1)
     key = np.stack(keys, axis=-1)
     ranked = np.take_along_axis(key, order[..., None], axis=1)
     first = np.ones((K, S), dtype=bool)
     first[:, 1:] = np.any(ranked[:, 1:] != ranked[:, :-1], axis=-1)
+    first &= np.take_along_axis(use, order, axis=1)
     gid = np.empty((K, S), dtype=np.int64)
-    np.put_along_axis(gid, order, np.cumsum(first, axis=1) - 1, axis=1)
-    G = int(gid.max(initial=-1)) + 1
+    np.put_along_axis(gid, order, np.maximum(np.cumsum(first, axis=1) - 1, 0), axis=1)
+    G = int(first.sum(axis=1).max(initial=0))
     rows = np.broadcast_to(np.arange(K)[:, None], (K, S))
     g_normals = np.zeros((K, G, 2))
-    g_normals[rows, gid] = face_normals
     g_use = np.zeros((K, G), dtype=bool)
-    np.logical_or.at(g_use, (rows, gid), use)
+    if G:
+        g_normals[rows[use], gid[use]] = face_normals[use]
+        g_use[rows[use], gid[use]] = True
     return gid, g_normals, g_use
+
+
+def latest_faces(
+    face_normals: np.ndarray, face_offsets: np.ndarray, assigned: np.ndarray, limit: int
+) -> np.ndarray:
+    """(K, S) the assigned contacts on the `limit` faces touched most recently: the
+    polygons' work grows as the cube of the faces they hold, and a contact run
+    along a finely drawn curve touches a new face almost every time. Fewer slabs
+    make a larger set (a superset of the consistent one): what it weighs stays a
+    weight, and bounds taken over it stay sound."""
+    gid, _, g_use = _face_groups(face_normals, face_offsets, assigned)
+    K, S = assigned.shape
+    faces_touched = g_use.shape[1]
+    if faces_touched <= limit:
+        return assigned
+    rows = np.broadcast_to(np.arange(K)[:, None], (K, S))
+    latest = np.full((K, faces_touched), -1)
+    np.maximum.at(latest, (rows[assigned], gid[assigned]), np.nonzero(assigned)[1])
+    rank = np.argsort(np.argsort(-latest, axis=1, kind="stable"), axis=1)
+    keep = (rank < limit) & (latest >= 0)
+    return assigned & np.take_along_axis(keep, gid, axis=1)
 
 
 def _polygons(
@@ -436,15 +478,19 @@ def consistent_poses(
     eps_d: float,
     phi: float,
     rotations: int = 4,
+    max_faces: int = MAX_FACES,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Poses spread over the set consistent with the contacts, per row: at
     `rotations` rotations across the interval the normals allow (cell midpoints),
     fixed convex mixtures of the polygon's vertices (inside it, the polygon
     being convex). Returns theta' (K, M), t' (K, M, 2) and `valid` (K, M) (False
-    where the polygon is empty or unbounded)."""
+    where the polygon is empty or unbounded). Only the contacts on the
+    `max_faces` faces touched last count (:func:`latest_faces`): the poses spread
+    over a superset of the consistent set."""
     K, s = assigned.shape
     points = np.broadcast_to(points, (K, s, 2))
     normals = np.broadcast_to(normals, (K, s, 2))
+    assigned = latest_faces(face_normals, face_offsets, assigned, max_faces)
     lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
     span = np.maximum(hi - lo, 0.0)
     d_theta = lo[:, None] + span[:, None] * (np.arange(rotations) + 0.5) / rotations

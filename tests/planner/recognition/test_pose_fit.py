@@ -15,6 +15,7 @@ from planner.recognition.consistent import (
     consistent_poses,
     consistent_set_bounds,
     consistent_volume,
+    latest_faces,
 )
 from planner.recognition.pose_fit import PoseFilter, fit_batch, noise_scales
 from planner.types import Pose, SensorBounds
@@ -201,3 +202,54 @@ def test_consistent_poses_keep_every_contact_within_its_bounds(name, seed, count
     assert np.all(np.abs(gap - face_offsets[0]) <= eps_d + 1e-9)
     ang = np.arctan2(normals[:, 1], normals[:, 0]) - np.arctan2(n[..., 1], n[..., 0])
     assert np.all(np.abs(np.remainder(ang + math.pi, 2 * math.pi) - math.pi) <= phi + 1e-9)
+
+
+def _polygon_touches(seed, sides, count):
+    """`count` exact contacts on random faces of a regular `sides`-gon of radius 50
+    posed at a random rotation: points, normals (s, 2), face normals, offsets (1, s)."""
+    rng = np.random.default_rng(seed)
+    ang = np.arange(sides) * 2 * math.pi / sides
+    normal = np.column_stack([np.cos(ang), np.sin(ang)])
+    offset = np.full(sides, 50.0)
+    faces = rng.integers(0, sides, count)
+    theta = rng.uniform(-math.pi, math.pi)
+    R = rotation_matrices(np.array([theta]))[0]
+    tangent = normal[faces] @ np.array([[0.0, 1.0], [-1.0, 0.0]])
+    along = rng.uniform(-10, 10, count)[:, None] * tangent
+    points = (normal[faces] * offset[faces, None] + along) @ R.T
+    normals = normal[faces] @ R.T
+    return points, normals, normal[faces][None], offset[faces][None], np.array([theta])
+
+
+@settings(max_examples=30, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(1, 16), limit=st.integers(2, 8))
+def test_the_likelihood_keeps_the_contacts_on_the_faces_touched_last(seed, count, limit):
+    _, _, face_normals, face_offsets, _ = _polygon_touches(seed, 24, count)
+    assigned = np.random.default_rng(seed).random((1, count)) < 0.9
+    kept = latest_faces(face_normals, face_offsets, assigned, limit)
+    key = [tuple(face_normals[0, j].round(12)) for j in range(count)]
+    touched = {key[j] for j in np.flatnonzero(assigned[0])}
+    chosen = {key[j] for j in np.flatnonzero(kept[0])}
+    assert not np.any(kept & ~assigned)
+    if len(touched) <= limit:
+        assert np.array_equal(kept, assigned)
+    else:
+        assert len(chosen) == limit
+        # every contact on a kept face counts; no dropped face was touched after a kept one
+        assert all(kept[0, j] for j in np.flatnonzero(assigned[0]) if key[j] in chosen)
+        last_use = {k: max(j for j in np.flatnonzero(assigned[0]) if key[j] == k) for k in touched}
+        assert min(last_use[k] for k in chosen) > max(
+            (last_use[k] for k in touched - chosen), default=-1
+        )
+
+
+@settings(max_examples=20, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), count=st.integers(3, 14), limit=st.integers(2, 8))
+def test_fewer_faces_make_a_consistent_set_no_smaller(seed, count, limit):
+    points, normals, face_normals, face_offsets, theta = _polygon_touches(seed, 24, count)
+    assigned = np.ones((1, count), bool)
+    eps_d, phi = 1.0, math.radians(3)
+    args = (points, normals, face_normals, face_offsets, assigned, theta, eps_d, phi)
+    whole = consistent_volume(*args, max_faces=count)
+    fewer = consistent_volume(*args, max_faces=limit)
+    assert np.all(fewer >= whole * (1 - 1e-9))
