@@ -301,6 +301,8 @@ def latest_faces(
     along a finely drawn curve touches a new face almost every time. Fewer slabs
     make a larger set (a superset of the consistent one): what it weighs stays a
     weight, and bounds taken over it stay sound."""
+    if assigned.sum(axis=1).max(initial=0) <= limit:  # no more contacts than faces kept
+        return assigned
     gid, _, g_use = _face_groups(face_normals, face_offsets, assigned)
     K, S = assigned.shape
     faces_touched = g_use.shape[1]

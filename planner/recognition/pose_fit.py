@@ -24,11 +24,14 @@ allowance covers the linearization.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 from filterpy.kalman import ExtendedKalmanFilter
 
+from planner.compiled import c_array
 from planner.geometry import SHARE_SLACK, rotate, rotation_matrices
 
 __all__ = ["FitBatch", "PoseFilter", "fit_batch", "lifted_rows", "noise_scales"]
@@ -258,13 +261,6 @@ def worst_case_bounds(
     return (dq * assigned).sum(axis=1), (dth * assigned).sum(axis=1)
 
 
-def _op_norm_2x2(a: np.ndarray) -> np.ndarray:
-    """Spectral norm of 2x2 blocks (..., 2, 2) in closed form."""
-    fro2 = np.sum(a * a, axis=(-2, -1))
-    det = a[..., 0, 0] * a[..., 1, 1] - a[..., 0, 1] * a[..., 1, 0]
-    return np.sqrt(0.5 * (fro2 + np.sqrt(np.maximum(fro2 * fro2 - 4 * det * det, 0.0))))
-
-
 def point_bounds(
     fit: FitBatch,
     points: np.ndarray,
@@ -287,12 +283,44 @@ def point_bounds(
     R = rotation_matrices(fit.theta[rows])
     points = np.broadcast_to(points, (len(rows), *points.shape[-2:]))
     arm = rotate(R @ _J, points)  # (N, P, 2): R J v
-    s_theta = fit.sens[rows, :, 2, :]  # (N, s, 3)
-    s_v = fit.sens_origin[rows][:, :, None] + (
-        arm[:, None, :, :, None] * s_theta[:, :, None, None, :]
+    out = np.empty(arm.shape[:2])
+    _worst_moves(
+        c_array(fit.sens_origin[rows], dtype=float),
+        c_array(fit.sens[rows, :, 2, :], dtype=float),  # (N, s, 3): d theta / d(px, py, psi)
+        arm,
+        c_array(assigned[rows], dtype=bool),
+        float(eps_d),
+        float(phi),
+        out,
     )
-    each = eps_d * _op_norm_2x2(s_v[..., :2]) + phi * np.hypot(s_v[..., 0, 2], s_v[..., 1, 2])
-    return np.einsum("ksp,ks->kp", each, assigned[rows].astype(float))
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _worst_moves(sens_origin, s_theta, arm, assigned, eps_d, phi, out):  # type: ignore[no-untyped-def]
+    """:func:`point_bounds` one fit and model point at a time: ``S_v = S_t + (R J
+    v) S_theta`` per assigned contact, its 2x2 position block's spectral norm (in
+    closed form) times eps_d plus phi times the norm of its normal column, summed
+    over the contacts, without the (N, s, P, 2, 3) array."""
+    N, S = assigned.shape
+    for n in range(N):
+        for p in range(arm.shape[1]):
+            ax, ay = arm[n, p, 0], arm[n, p, 1]
+            total = 0.0
+            for j in range(S):
+                if not assigned[n, j]:
+                    continue
+                a00 = sens_origin[n, j, 0, 0] + ax * s_theta[n, j, 0]
+                a01 = sens_origin[n, j, 0, 1] + ax * s_theta[n, j, 1]
+                a02 = sens_origin[n, j, 0, 2] + ax * s_theta[n, j, 2]
+                a10 = sens_origin[n, j, 1, 0] + ay * s_theta[n, j, 0]
+                a11 = sens_origin[n, j, 1, 1] + ay * s_theta[n, j, 1]
+                a12 = sens_origin[n, j, 1, 2] + ay * s_theta[n, j, 2]
+                fro2 = a00 * a00 + a01 * a01 + a10 * a10 + a11 * a11
+                det = a00 * a11 - a01 * a10
+                root = math.sqrt(max(fro2 * fro2 - 4 * det * det, 0.0))
+                total += eps_d * math.sqrt(0.5 * (fro2 + root)) + phi * math.hypot(a02, a12)
+            out[n, p] = total
 
 
 class PoseFilter:

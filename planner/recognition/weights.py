@@ -178,8 +178,8 @@ def _admitted_share(
     K, M = valid.shape
     faces = group.stable.all_faces
     R = rotation_matrices(theta.reshape(-1)).reshape(K, M, 2, 2)
-    start = np.einsum("kmij,ksj->kmsi", R, faces.start[face]) + t[:, :, None, :]
-    end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None, :]
+    start = _posed(R, faces.start[face], t)
+    end = _posed(R, faces.end[face], t)
     dist = point_segment_distance(P[None, None], start, end)  # (K, M, s)
     good = valid & np.all(~assigned[:, None, :] | (dist <= eps_d + floor), axis=-1)
     clear = clear_paths(
@@ -197,3 +197,14 @@ def _admitted_share(
     count = valid.sum(axis=1)
     share = good.sum(axis=1) / np.maximum(count, 1)
     return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
+
+
+def _posed(R: np.ndarray, points: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``R v + t`` (K, M, s, 2) for rotations `R` (K, M, 2, 2), translations `t`
+    (K, M, 2) and each row's points `v` (K, s, 2): the arithmetic of
+    :func:`planner.geometry.rotate`, broadcast over the M poses of a row."""
+    x, y = points[:, None, :, 0], points[:, None, :, 1]
+    out = np.empty((*R.shape[:2], points.shape[1], 2))
+    out[..., 0] = R[..., 0, 0, None] * x + R[..., 0, 1, None] * y + t[:, :, None, 0]
+    out[..., 1] = R[..., 1, 0, None] * x + R[..., 1, 1, None] * y + t[:, :, None, 1]
+    return out

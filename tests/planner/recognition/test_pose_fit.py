@@ -17,7 +17,7 @@ from planner.recognition.consistent import (
     consistent_volume,
     latest_faces,
 )
-from planner.recognition.pose_fit import PoseFilter, fit_batch, noise_scales
+from planner.recognition.pose_fit import PoseFilter, fit_batch, noise_scales, point_bounds
 from planner.types import Pose, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
 
@@ -253,3 +253,28 @@ def test_fewer_faces_make_a_consistent_set_no_smaller(seed, count, limit):
     whole = consistent_volume(*args, max_faces=count)
     fewer = consistent_volume(*args, max_faces=limit)
     assert np.all(fewer >= whole * (1 - 1e-9))
+
+
+@settings(max_examples=20, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), contacts=st.integers(1, 12), vertices=st.integers(1, 40))
+def test_point_bounds_add_each_contacts_worst_case(seed, contacts, vertices):
+    # the compiled sum equals the array formula: S_v = S_t + (R J v) S_theta per
+    # contact, eps_d ||S_v[:2, :2]||_2 + phi |S_v[:, 2]|, over the assigned contacts
+    rng = np.random.default_rng(seed)
+    K = 7
+    fit = type("Fit", (), {})()
+    fit.theta = rng.uniform(-math.pi, math.pi, K)
+    fit.sens = rng.normal(size=(K, contacts, 3, 3))
+    fit.sens_origin = rng.normal(size=(K, contacts, 2, 3))
+    points = rng.normal(size=(vertices, 2)) * 40
+    assigned = rng.random((K, contacts)) < 0.8
+    eps_d, phi = 1.0, 0.05
+    arm = np.einsum("kij,pj->kpi", rotation_matrices(fit.theta) @ [[0, -1], [1, 0]], points)
+    s_v = fit.sens_origin[:, :, None] + arm[:, None, :, :, None] * fit.sens[:, :, None, None, 2, :]
+    each = eps_d * np.linalg.norm(s_v[..., :2], ord=2, axis=(-2, -1)) + phi * np.hypot(
+        s_v[..., 0, 2], s_v[..., 1, 2]
+    )
+    expected = (each * assigned[:, :, None]).sum(axis=1)
+    np.testing.assert_allclose(
+        point_bounds(fit, points, assigned, eps_d, phi), expected, rtol=1e-9, atol=1e-12
+    )
