@@ -442,25 +442,45 @@ def _volume(
     span = np.maximum(hi - lo, 0.0)
     d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)
     vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, eps_d)
-    # the polygon: its vertices in angular order about their mean, shoelace
-    count = ok.sum(axis=-1)
-    mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
-    my = np.where(ok, vy, 0.0).sum(axis=-1) / np.maximum(count, 1)
-    ang = np.where(ok, np.arctan2(vy - my[..., None], vx - mx[..., None]), np.inf)
-    order = np.argsort(ang, axis=-1)
-    sx = np.take_along_axis(np.where(ok, vx, np.nan), order, axis=-1)
-    sy = np.take_along_axis(np.where(ok, vy, np.nan), order, axis=-1)
-    # close each polygon: the last valid vertex is followed by the first
-    last = np.maximum(count - 1, 0)
-    idx = np.arange(sx.shape[-1])
-    wrap = idx == last[..., None]
-    nx_ = np.where(wrap, sx[..., :1], np.roll(sx, -1, axis=-1))
-    ny_ = np.where(wrap, sy[..., :1], np.roll(sy, -1, axis=-1))
-    cross = np.where(idx < count[..., None], sx * ny_ - sy * nx_, 0.0)
-    area = np.where(count >= 3, np.abs(np.nansum(cross, axis=-1)) / 2, 0.0)  # (K, N)
+    area = np.zeros(ok.shape[:2])  # (K, N)
+    _polygon_areas(vx, vy, ok, area)
     step = span / (samples - 1)
     volume = (area.sum(axis=1) - (area[:, 0] + area[:, -1]) / 2) * step
     return np.where(bounded, volume, np.inf)
+
+
+@numba.njit(cache=True, nogil=True)
+def _polygon_areas(vx, vy, ok, out):  # type: ignore[no-untyped-def]
+    """out[k, n] = the area of the convex polygon whose vertices are the `ok`
+    crossings of row k at rotation n: in angular order about their mean, the
+    shoelace sum (0 below three vertices)."""
+    K, N, V = vx.shape
+    xs = np.empty(V)
+    ys = np.empty(V)
+    for k in range(K):
+        for n in range(N):
+            count = 0
+            for i in range(V):
+                if ok[k, n, i]:
+                    xs[count], ys[count] = vx[k, n, i], vy[k, n, i]
+                    count += 1
+            if count < 3:
+                out[k, n] = 0.0
+                continue
+            mx, my = 0.0, 0.0
+            for i in range(count):
+                mx += xs[i]
+                my += ys[i]
+            mx, my = mx / count, my / count
+            ang = np.empty(count)
+            for i in range(count):
+                ang[i] = math.atan2(ys[i] - my, xs[i] - mx)
+            order = np.argsort(ang)
+            total = 0.0
+            for i in range(count):
+                a, b = order[i], order[(i + 1) % count]
+                total += xs[a] * ys[b] - ys[a] * xs[b]
+            out[k, n] = abs(total) / 2
 
 
 @functools.lru_cache(maxsize=32)
