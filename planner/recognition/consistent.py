@@ -110,7 +110,10 @@ def consistent_set_bounds(
     slack = ANGLE_SLACK  # rounding of the measured angles
     lo, hi = _theta_interval(normals, face_normals, use, theta, phi + slack)
     lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
-    per_row = samples * s * (s - 1) * 2 * max(P, s)
+    # a chunk's largest arrays: the crossings of the used contacts' slabs (at most
+    # `max_contacts` of them) at every rotation, and the model points moved
+    used = min(s, max_contacts)
+    per_row = samples * (2 * used * (used - 1) + s + P)
     chunk = max(1, 2_000_000 // per_row)
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))

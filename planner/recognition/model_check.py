@@ -15,21 +15,28 @@ from __future__ import annotations
 
 import math
 
+import numba
 import numpy as np
 import shapely
 
+from planner.compiled import c_array
 from planner.geometry import (
     ANGLE_SLACK,
     LENGTH_SLACK,
     SHARE_SLACK,
-    point_segment_distance,
     rotation_matrices,
     wrap_angle,
 )
 from planner.recognition.tree import Group
 from planner.types import Faces, Observation, Workspace
 
-__all__ = ["clear_paths", "free_space_check", "inside_workspace", "model_check"]
+__all__ = [
+    "clear_paths",
+    "contacts_on_faces",
+    "free_space_check",
+    "inside_workspace",
+    "model_check",
+]
 
 #: The most (pose, path) segments one pass of the free-space check holds.
 CHECK_PAIRS = 200_000
@@ -59,14 +66,66 @@ def model_check(
     `eps_t`, `d_theta` (N,) their error bounds.
     """
     # each contact on its finite posed face, normal within phi + dtheta
-    Rs = rotation_matrices(theta)
-    start = np.einsum("nij,nsj->nsi", Rs, faces.start[face]) + t[:, None, :]
-    end = np.einsum("nij,nsj->nsi", Rs, faces.end[face]) + t[:, None, :]
-    dist = point_segment_distance(points[None], start, end)
-    ok = np.all(~assigned | (dist <= eps_d + eps_t[:, None] / 2 + slack), axis=1)
+    tol = eps_d + eps_t / 2 + slack
+    ok = contacts_on_faces(points, faces, face, assigned, theta[:, None], t[:, None], tol[:, None])
+    ok = ok[:, 0]
     ang = np.abs(wrap_angle(psi[None, :] - theta[:, None] - faces.angle[face]))
     ok &= np.all(~assigned | (ang <= phi + d_theta[:, None] + ANGLE_SLACK), axis=1)
     return ok
+
+
+def contacts_on_faces(
+    points: np.ndarray,
+    faces: Faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+    tol: np.ndarray,
+) -> np.ndarray:
+    """(K, M) does every assigned contact (`points` (s, 2)) lie within `tol` (K, M)
+    of its FINITE face (`face`, `assigned` (K, s)) posed at ``theta`` (K, M), ``t``
+    (K, M, 2)? One pass per pose that stops at the first contact off its face,
+    with the arithmetic of :func:`planner.geometry.point_segment_distance` on the
+    faces posed as :func:`planner.geometry.rotate` poses them."""
+    out = np.ones(theta.shape, dtype=bool)
+    _on_faces(
+        c_array(points, dtype=float),
+        c_array(faces.start, dtype=float),
+        c_array(faces.end, dtype=float),
+        c_array(face, dtype=np.int64),
+        c_array(assigned, dtype=bool),
+        c_array(np.cos(theta), dtype=float),
+        c_array(np.sin(theta), dtype=float),
+        c_array(t, dtype=float),
+        c_array(np.broadcast_to(tol, theta.shape), dtype=float),
+        out,
+    )
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _on_faces(points, starts, ends, face, assigned, cos, sin, t, tol, out):  # type: ignore[no-untyped-def]
+    """:func:`contacts_on_faces`, one pose at a time."""
+    K, M = cos.shape
+    for k in range(K):
+        for m in range(M):
+            c, s = cos[k, m], sin[k, m]
+            tx, ty = t[k, m, 0], t[k, m, 1]
+            for j in range(face.shape[1]):
+                if not assigned[k, j]:
+                    continue
+                f = face[k, j]
+                ax = c * starts[f, 0] + -s * starts[f, 1] + tx
+                ay = s * starts[f, 0] + c * starts[f, 1] + ty
+                ex = (c * ends[f, 0] + -s * ends[f, 1] + tx) - ax
+                ey = (s * ends[f, 0] + c * ends[f, 1] + ty) - ay
+                sq = max(ex * ex + ey * ey, 1e-300)
+                px, py = points[j, 0], points[j, 1]
+                u = min(max(((px - ax) * ex + (py - ay) * ey) / sq, 0.0), 1.0)
+                if math.hypot(px - (ax + u * ex), py - (ay + u * ey)) > tol[k, m]:
+                    out[k, m] = False
+                    break
 
 
 def inside_workspace(

@@ -14,10 +14,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices
+from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.consistent import consistent_poses, consistent_volume
-from planner.recognition.model_check import clear_paths
+from planner.recognition.model_check import clear_paths, contacts_on_faces
 from planner.recognition.poses import PoseFit, SlideSamples, determined_rows
 from planner.recognition.tree import Group
 from planner.types import Faces, Observation
@@ -177,11 +177,9 @@ def _admitted_share(
     1 where no pose is spread)."""
     K, M = valid.shape
     faces = group.stable.all_faces
-    R = rotation_matrices(theta.reshape(-1)).reshape(K, M, 2, 2)
-    start = _posed(R, faces.start[face], t)
-    end = _posed(R, faces.end[face], t)
-    dist = point_segment_distance(P[None, None], start, end)  # (K, M, s)
-    good = valid & np.all(~assigned[:, None, :] | (dist <= eps_d + floor), axis=-1)
+    good = valid & contacts_on_faces(
+        P, faces, face, assigned, theta, t, np.full((K, M), eps_d + floor)
+    )
     clear = clear_paths(
         group,
         observations,
@@ -197,14 +195,3 @@ def _admitted_share(
     count = valid.sum(axis=1)
     share = good.sum(axis=1) / np.maximum(count, 1)
     return np.where(count > 0, np.maximum(share, _FITNESS_FLOOR), 1.0)
-
-
-def _posed(R: np.ndarray, points: np.ndarray, t: np.ndarray) -> np.ndarray:
-    """``R v + t`` (K, M, s, 2) for rotations `R` (K, M, 2, 2), translations `t`
-    (K, M, 2) and each row's points `v` (K, s, 2): the arithmetic of
-    :func:`planner.geometry.rotate`, broadcast over the M poses of a row."""
-    x, y = points[:, None, :, 0], points[:, None, :, 1]
-    out = np.empty((*R.shape[:2], points.shape[1], 2))
-    out[..., 0] = R[..., 0, 0, None] * x + R[..., 0, 1, None] * y + t[:, :, None, 0]
-    out[..., 1] = R[..., 1, 0, None] * x + R[..., 1, 1, None] * y + t[:, :, None, 1]
-    return out

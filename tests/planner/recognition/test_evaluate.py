@@ -11,11 +11,16 @@ from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import World, random_world
-from planner.geometry import LENGTH_SLACK, wrap_angle
+from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices, wrap_angle
 from planner.models.outlines import make_stable_pose
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.evaluate import evaluate
-from planner.recognition.model_check import free_space_check, inside_workspace, model_check
+from planner.recognition.model_check import (
+    contacts_on_faces,
+    free_space_check,
+    inside_workspace,
+    model_check,
+)
 from planner.recognition.poses import (
     fit_bounds,
     fit_poses,
@@ -466,3 +471,26 @@ def test_residual_fitness_is_one_for_exact_contacts_and_less_on_the_edges():
 def _turn(u, angle):
     c, s = math.cos(angle), math.sin(angle)
     return (c * u[0] - s * u[1], s * u[0] + c * u[1])
+
+
+@settings(max_examples=25, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), contacts=st.integers(1, 8), poses=st.integers(1, 6))
+def test_contacts_on_faces_is_the_distance_to_each_posed_segment(seed, contacts, poses):
+    # the compiled pass answers as the array formula does: every assigned contact
+    # within the tolerance of its posed finite face
+    rng = np.random.default_rng(seed)
+    stable = make_stable_pose([[0, 0], [40, 0], [40, 12], [22, 12], [22, 30], [0, 30]])
+    faces, K = stable.faces, 9
+    face = rng.integers(0, len(faces), (K, contacts))
+    assigned = rng.random((K, contacts)) < 0.8
+    theta = rng.uniform(-math.pi, math.pi, (K, poses))
+    t = rng.uniform(-5, 5, (K, poses, 2))
+    points = rng.uniform(-40, 40, (contacts, 2))
+    tol = rng.uniform(0, 30, (K, poses))
+    R = rotation_matrices(theta)  # (K, M, 2, 2)
+    start = np.einsum("kmij,ksj->kmsi", R, faces.start[face]) + t[:, :, None]
+    end = np.einsum("kmij,ksj->kmsi", R, faces.end[face]) + t[:, :, None]
+    dist = point_segment_distance(points[None, None], start, end)  # (K, M, s)
+    expected = np.all(~assigned[:, None] | (dist <= tol[..., None]), axis=-1)
+    found = contacts_on_faces(points, faces, face, assigned, theta, t, tol)
+    assert np.array_equal(found, expected)
