@@ -232,10 +232,7 @@ def consistent_volume(
     lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
     # a chunk's largest arrays hold its contacts and the corner tests of the slabs:
     # one slab per face touched, however many contacts lie on it
-    touched = np.unique(
-        np.column_stack([face_offsets.ravel(), face_normals.reshape(-1, 2)]), axis=0
-    )
-    g = min(s, len(touched), max_faces)
+    g = min(s, max_faces)
     chunk = max(1, 1_000_000 // (samples * (s + 2 * g**3)))
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))

@@ -204,13 +204,12 @@ def clear_paths(
         b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
         lines = shapely.linestrings(np.stack([a, b], axis=1))
         # one pass per (height, shrink): the segments sorted by it and split
-        kinds, which = np.unique(
-            np.column_stack([layer[k], bucket[i]]), axis=0, return_inverse=True
-        )
-        which = which.reshape(-1)
+        values, level = np.unique(bucket[i], return_inverse=True)
+        kinds, which = np.unique(layer[k] * len(values) + level, return_inverse=True)
         ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
-        for (z, value), sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
-            crossed = shapely.intersects(lines[sel], group.shrunk(float(value), int(z)))
+        for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
+            z, value = divmod(int(kind), len(values))
+            crossed = shapely.intersects(lines[sel], group.shrunk(float(values[value]), z))
             keep[i[sel[crossed]]] = False
     return keep
 
