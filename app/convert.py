@@ -176,11 +176,21 @@ def next_state(
     return new, body, Snapshot(code_version(), snapshot(new)) if keep else None
 
 
-def observed(session: Session, observation: Observation, most: int) -> Session:
-    """The session after `observation`, refused (409 naming ``max_hypotheses``) when
-    it would leave more than `most` hypotheses: counted from the tree, before the
-    equivalence classes, whose cost grows with the hypotheses."""
+def observed(session: Session, observation: Observation, most: int, work: int) -> Session:
+    """The session after `observation`, refused (409) when checking the
+    interpretations it leaves would cost more than `work` units (naming
+    ``max_interpretation_work``; known before any is checked), or when it would
+    leave more than `most` hypotheses (naming ``max_hypotheses``: counted from the
+    tree, before the equivalence classes, whose cost grows with the hypotheses)."""
     new = session.observe(observation)
+    if (cost := new.interpretation_work) > work:
+        raise LimitExceededError(
+            f"this observation would leave interpretations costing {cost} units to check, "
+            f"over max_interpretation_work ({work}); it is not recorded. Give the session "
+            "a prior (where the part lies) or fewer objects or stable poses; a part "
+            "localized long ago needs no more touches",
+            field="max_interpretation_work",
+        )
     if (count := new.hypothesis_count) > most:
         raise LimitExceededError(
             f"this observation would leave {count} hypotheses, over max_hypotheses "

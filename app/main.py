@@ -152,7 +152,8 @@ def create_app(settings: Settings | None = None) -> FastAPI:
             f"{settings.max_worked_vertices} once simplified within the sensor's bounds, "
             f"{settings.max_objects_per_session} objects and "
             f"{settings.max_observations_per_session} observations per session, "
-            f"{settings.max_hypotheses} hypotheses left by an observation, "
+            f"{settings.max_hypotheses} hypotheses left by an observation "
+            f"(and {settings.max_interpretation_work:,} units of interpretations to check), "
             f"plan budget up to {settings.max_plan_budget_ms:g} ms, "
             f"request bodies up to {settings.max_body_bytes} bytes."
         ),

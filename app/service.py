@@ -349,13 +349,14 @@ class SessionService:
         stored = observation_to_dict(observation)
         cap = self.settings.max_observations_per_session
         most = self.settings.max_hypotheses
+        work = self.settings.max_interpretation_work
 
         def step(record: SessionRecord, session: Session) -> Session:
             if len(record.observations) >= cap:
                 raise LimitExceededError(
                     f"a session holds at most {cap} observations", field="observations"
                 )
-            return observed(session, observation, most)
+            return observed(session, observation, most, work)
 
         def write(
             record: SessionRecord, idem: IdempotentWrite | None, snap: Snapshot | None

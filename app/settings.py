@@ -97,6 +97,14 @@ class Settings(BaseSettings):
     max_hypotheses: int = Field(
         10_000, ge=1, le=10_000_000, description="hypotheses an observation may leave"
     )
+    max_interpretation_work: int = Field(
+        1_000_000,
+        ge=1,
+        le=10_000_000_000,
+        description="interpretations an observation leaves to check, times (contacts + "
+        "slide samples): known from the interpretation tree before any is checked, "
+        "about 5-10 microseconds a unit",
+    )
     max_plan_budget_ms: float = Field(10_000.0, gt=0, le=3_600_000)
     max_plan_budget_work: float = Field(
         10_000_000.0, gt=0, le=1e12, description="units of planning work (~us on the reference)"

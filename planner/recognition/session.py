@@ -169,6 +169,7 @@ class Session:
         """Pickled without the parent chain (a restored session undoes by replaying)."""
         state = dict(self.__dict__)
         state["_parent"] = None
+        state.pop("_extended", None)  # the tree before the checks: only the update needs it
         return state
 
     @property
@@ -194,7 +195,9 @@ class Session:
 
     # -- derived state ------------------------------------------------------------
     @cached_property
-    def _derived(self) -> _Derived:
+    def _extended(self) -> TreeLevel | None:
+        """The interpretation tree grown by the last observation, before any
+        interpretation is checked (None without observations): table lookups only."""
         parent_level: TreeLevel | None
         if self._parent is not None:
             parent_level = self._parent._derived.level
@@ -206,16 +209,37 @@ class Session:
                 prefix = prefix.observe(obs)
             parent_level = prefix._derived.level
         if parent_level is None:  # no observation at all
+            return None
+        last = self.observations[-1]
+        if last.contact is None:
+            return parent_level
+        contacts = [o.contact for o in self.surface_observations if o.contact is not None]
+        return extend(
+            parent_level, self._groups, contacts, self.bounds, self.config, last.path.height
+        )
+
+    @property
+    def interpretation_work(self) -> int:
+        """What checking the interpretations the last observation leaves will cost,
+        known before any is checked: each row of the tree is fitted, bounded and
+        checked against every contact, and a row that leaves the pose free to slide
+        is sampled (up to ``max_family_samples``), so rows x (contacts + samples).
+        About 5-10 microseconds a unit on a 2-core machine."""
+        if not self.observations:
+            return 0
+        # a checked (or restored) session counts the interpretations the checks left
+        level = self._derived.level if "_derived" in self.__dict__ else self._extended
+        contacts = sum(1 for o in self.observations if o.contact is not None)
+        rows = sum(len(r) for r in level.rows)  # type: ignore[union-attr]
+        return rows * (contacts + self.config.max_family_samples)
+
+    @cached_property
+    def _derived(self) -> _Derived:
+        level = self._extended
+        if level is None:  # no observation at all
             empty = tuple(np.zeros((1, 0), np.int64) for _ in self._groups)
             return _Derived(TreeLevel(rows=empty), ())
-        level = parent_level
-        last = self.observations[-1]
         seen = self.surface_observations
-        contacts = [o.contact for o in seen if o.contact is not None]
-        if last.contact is not None:
-            level = extend(
-                level, self._groups, contacts, self.bounds, self.config, last.path.height
-            )
         candidates = []
         rows_kept = []
         for g, (group, rows) in enumerate(zip(self._groups, level.rows, strict=True)):

@@ -539,6 +539,20 @@ def test_an_observation_leaving_too_many_hypotheses_is_409_and_not_recorded(tmp_
         assert c.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM).status_code == 201
 
 
+def test_an_observation_too_costly_to_check_is_409_before_it_is_checked(tmp_path):
+    with api(tmp_path, max_interpretation_work=1) as c:
+        s = create_session(c)
+        url = f"/v1/sessions/{s['id']}/observations"
+        r = c.post(url, json=BOTTOM)
+        assert is_problem(r, 409)
+        assert r.json()["errors"][0]["field"] == "max_interpretation_work"
+        after = c.get(f"/v1/sessions/{s['id']}").json()
+        assert after["version"] == 1 and after["observations"] == []
+    with api(tmp_path) as c:
+        s = create_session(c)
+        assert c.post(f"/v1/sessions/{s['id']}/observations", json=BOTTOM).status_code == 201
+
+
 def test_sessions_survive_a_restart_on_the_same_file(tmp_path):
     with api(tmp_path) as c:
         s = create_session(c)

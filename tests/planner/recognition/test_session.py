@@ -162,3 +162,26 @@ def test_the_hypothesis_count_known_before_the_classes_is_their_number(outliers)
         count = s.hypothesis_count
         assert "hypotheses" not in s.__dict__  # nothing of the classes computed yet
         assert count == len(s.hypotheses) > 0
+
+
+@pytest.mark.parametrize("outliers", [0, 1])
+def test_the_interpretation_work_is_known_before_any_interpretation_is_checked(outliers):
+    config = RecognitionConfig(outliers)
+    s = Session(object_set("workshop"), SensorBounds(1, 0.05), WORKSPACE, config)
+    assert s.interpretation_work == 0
+    touches = [
+        _obs((0, -200), (0, 1), (0, -30), (0, -1)),
+        _obs((0, 200), (0, -1)),  # a miss: the tree does not grow
+        _obs((200, 0), (-1, 0), (35, 0), (1, 0)),
+    ]
+    for contacts, touch in zip([1, 1, 2], touches, strict=True):
+        s = s.observe(touch)
+        work = s.interpretation_work
+        assert "_derived" not in s.__dict__  # nothing checked yet
+        rows = sum(len(r) for r in s._extended.rows)
+        assert work == rows * (contacts + config.max_family_samples) > 0
+        s.hypotheses  # noqa: B018 - the check
+        # the checks only remove interpretations; a checked session counts what they left
+        left = sum(len(r) for r in s._derived.level.rows)
+        assert s.interpretation_work == left * (contacts + config.max_family_samples) <= work
+        assert "_extended" not in s.__getstate__()
