@@ -86,7 +86,11 @@ def feature_candidates(
     first: list[tuple[np.ndarray, np.ndarray]] = []
     rest: list[tuple[np.ndarray, np.ndarray]] = []
     for a, b in combinations(outlines, 2):
+        if len(first) >= limit:  # the paths kept are the first `limit`: no region adds one
+            break
         for region in _regions(a, b, width)[:MAX_REGIONS]:
+            if len(first) >= limit:
+                break
             target = polylabel(region, tolerance=max(width, 1e-3 * math.sqrt(region.area)) / 4)
             aim = np.array([target.x, target.y])
             solid = a if a.covers(target) else b

@@ -232,7 +232,7 @@ def consistent_volume(
     lo, hi = _theta_interval(normals, face_normals, assigned, theta, phi)
     # a chunk's largest arrays hold its contacts and the corner tests of the slabs:
     # one slab per face touched, however many contacts lie on it
-    g = min(s, max_faces)
+    g = min(s, _distinct_faces(face_normals, face_offsets), max_faces)
     chunk = max(1, 1_000_000 // (samples * (s + 2 * g**3)))
     for k0 in range(0, K, chunk):
         sl = slice(k0, min(K, k0 + chunk))
@@ -241,6 +241,15 @@ def consistent_volume(
             theta[sl], lo[sl], hi[sl], eps_d, samples,
         )  # fmt: skip
     return volume
+
+
+def _distinct_faces(face_normals: np.ndarray, face_offsets: np.ndarray) -> int:
+    """How many distinct faces (offset and normal) the rows hold between them: one
+    sort of the flattened keys (a row-wise unique of the triples took longer)."""
+    keys = (face_normals[..., 1].ravel(), face_normals[..., 0].ravel(), face_offsets.ravel())
+    order = np.lexsort(keys)
+    ranked = np.stack([k[order] for k in keys])
+    return int(1 + np.any(ranked[:, 1:] != ranked[:, :-1], axis=0).sum()) if order.size else 0
 
 
 def _theta_interval(
@@ -442,45 +451,113 @@ def _volume(
     span = np.maximum(hi - lo, 0.0)
     d_theta = lo[:, None] + span[:, None] * np.linspace(0.0, 1.0, samples)
     vx, vy, ok, bounded = _polygons(points, face_normals, face_offsets, use, theta, d_theta, eps_d)
-    area = np.zeros(ok.shape[:2])  # (K, N)
-    _polygon_areas(vx, vy, ok, area)
+    area = _polygon_areas(vx, vy, ok)  # (K, N)
     step = span / (samples - 1)
     volume = (area.sum(axis=1) - (area[:, 0] + area[:, -1]) / 2) * step
     return np.where(bounded, volume, np.inf)
 
 
+def _polygon_areas(vx: np.ndarray, vy: np.ndarray, ok: np.ndarray) -> np.ndarray:
+    """(K, N) the area of the convex polygon whose vertices are the `ok` crossings
+    of row k at rotation n: in angular order about their mean, the shoelace sum
+    (0 below three vertices). The mean and the angular order are numpy's (its sort
+    decides between vertices that coincide, as many do at a polygon's corners),
+    the shoelace is compiled and sums in numpy's order: the areas are the array
+    formula's bit for bit."""
+    count = ok.sum(axis=-1)
+    mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    my = np.where(ok, vy, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    ang = np.where(ok, np.arctan2(vy - my[..., None], vx - mx[..., None]), np.inf)
+    order = np.argsort(ang, axis=-1)
+    area = np.zeros(count.shape)
+    _shoelace(c_array(vx), c_array(vy), order, count, area)
+    return area
+
+
 @numba.njit(cache=True, nogil=True)
-def _polygon_areas(vx, vy, ok, out):  # type: ignore[no-untyped-def]
-    """out[k, n] = the area of the convex polygon whose vertices are the `ok`
-    crossings of row k at rotation n: in angular order about their mean, the
-    shoelace sum (0 below three vertices)."""
+def _shoelace(vx, vy, order, count, out):  # type: ignore[no-untyped-def]
+    """out[k, n] = |sum of x_a y_b - y_a x_b| / 2 over consecutive vertices a, b of
+    `order` (the first `count` entries, closed), summed over all V slots (zeros
+    past `count`) as numpy's pairwise summation adds."""
     K, N, V = vx.shape
-    xs = np.empty(V)
-    ys = np.empty(V)
+    terms = np.empty(V)
     for k in range(K):
         for n in range(N):
-            count = 0
-            for i in range(V):
-                if ok[k, n, i]:
-                    xs[count], ys[count] = vx[k, n, i], vy[k, n, i]
-                    count += 1
-            if count < 3:
-                out[k, n] = 0.0
+            c = count[k, n]
+            if c < 3:
                 continue
-            mx, my = 0.0, 0.0
-            for i in range(count):
-                mx += xs[i]
-                my += ys[i]
-            mx, my = mx / count, my / count
-            ang = np.empty(count)
-            for i in range(count):
-                ang[i] = math.atan2(ys[i] - my, xs[i] - mx)
-            order = np.argsort(ang)
-            total = 0.0
-            for i in range(count):
-                a, b = order[i], order[(i + 1) % count]
-                total += xs[a] * ys[b] - ys[a] * xs[b]
-            out[k, n] = abs(total) / 2
+            for i in range(V):
+                terms[i] = 0.0
+            for i in range(c):
+                a, b = order[k, n, i], order[k, n, (i + 1) % c]
+                terms[i] = vx[k, n, a] * vy[k, n, b] - vy[k, n, a] * vx[k, n, b]
+            out[k, n] = abs(_pairwise_sum(terms, 0, V)) / 2
+
+
+@numba.njit(cache=True, nogil=True)
+def _pairwise_sum(a, lo, n):  # type: ignore[no-untyped-def]
+    """sum(a[lo:lo + n]) as numpy's float reduction adds: halves (cut at a
+    multiple of 8) down to blocks of at most 128 terms (:func:`_block_sum`), the
+    halves' sums added as they return. Without recursion (a cached recursive
+    kernel does not load back safely): the halving tree walked with a stack."""
+    if n <= 128:
+        return _block_sum(a, lo, n)
+    # post-order walk: (lo, n, stage) frames; stage 0 = split, 1 = add the halves
+    f_lo = np.empty(64, np.int64)
+    f_n = np.empty(64, np.int64)
+    f_stage = np.empty(64, np.int64)
+    sums = np.empty(64)
+    top, depth = 0, 0
+    f_lo[0], f_n[0], f_stage[0] = lo, n, 0
+    while top >= 0:
+        m = f_n[top]
+        if m <= 128:
+            sums[depth] = _block_sum(a, f_lo[top], m)
+            depth += 1
+            top -= 1
+        elif f_stage[top] == 0:
+            half = m // 2
+            half -= half % 8
+            f_stage[top] = 1
+            # the right half is walked after the left: push it first
+            f_lo[top + 1], f_n[top + 1], f_stage[top + 1] = f_lo[top] + half, m - half, 0
+            f_lo[top + 2], f_n[top + 2], f_stage[top + 2] = f_lo[top], half, 0
+            top += 2
+        else:
+            depth -= 1
+            sums[depth - 1] = sums[depth - 1] + sums[depth]
+            top -= 1
+    return sums[0]
+
+
+@numba.njit(cache=True, nogil=True)
+def _block_sum(a, lo, n):  # type: ignore[no-untyped-def]
+    """numpy's pairwise sum of at most 128 terms: one by one below 8, else eight
+    running sums added in pairs, then the rest one by one."""
+    if n < 8:
+        res = 0.0
+        for i in range(lo, lo + n):
+            res += a[i]
+        return res
+    r0, r1, r2, r3 = a[lo], a[lo + 1], a[lo + 2], a[lo + 3]
+    r4, r5, r6, r7 = a[lo + 4], a[lo + 5], a[lo + 6], a[lo + 7]
+    i = 8
+    while i < n - n % 8:
+        j = lo + i
+        r0 += a[j]
+        r1 += a[j + 1]
+        r2 += a[j + 2]
+        r3 += a[j + 3]
+        r4 += a[j + 4]
+        r5 += a[j + 5]
+        r6 += a[j + 6]
+        r7 += a[j + 7]
+        i += 8
+    res = ((r0 + r1) + (r2 + r3)) + ((r4 + r5) + (r6 + r7))
+    while i < n:
+        res += a[lo + i]
+        i += 1
+    return res
 
 
 @functools.lru_cache(maxsize=32)

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.spatial import ConvexHull, QhullError
 
 from planner.geometry import rotation_matrices
-from planner.recognition.consistent import _polygons
+from planner.recognition.consistent import _pairwise_sum, _polygon_areas, _polygons
 
 
 def _slow_polygons(points, face_normals, face_offsets, use, theta, d_theta, width):
@@ -73,3 +73,44 @@ def test_one_slab_per_face_gives_the_polygon_of_one_slab_per_contact(seed, conta
             fast = _area(vx[k, m][ok[k, m]], vy[k, m][ok[k, m]])
             slow = _area(rx[k, m][rok[k, m]], ry[k, m][rok[k, m]])
             assert abs(fast - slow) <= 1e-6 * max(1.0, slow), (k, m, fast, slow)
+
+
+@settings(max_examples=30, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), n=st.integers(1, 700))
+def test_the_compiled_sum_adds_as_numpy_does(seed, n):
+    rng = np.random.default_rng(seed)
+    a = rng.normal(size=n) * 10.0 ** rng.uniform(-5, 5, n)  # magnitudes that round
+    assert _pairwise_sum(a, 0, n) == a.sum()
+
+
+def _areas_by_arrays(vx, vy, ok):
+    """The polygon areas as array passes: angular order about the mean, shoelace."""
+    count = ok.sum(axis=-1)
+    mx = np.where(ok, vx, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    my = np.where(ok, vy, 0.0).sum(axis=-1) / np.maximum(count, 1)
+    ang = np.where(ok, np.arctan2(vy - my[..., None], vx - mx[..., None]), np.inf)
+    order = np.argsort(ang, axis=-1)
+    sx = np.take_along_axis(np.where(ok, vx, np.nan), order, axis=-1)
+    sy = np.take_along_axis(np.where(ok, vy, np.nan), order, axis=-1)
+    idx = np.arange(sx.shape[-1])
+    wrap = idx == np.maximum(count - 1, 0)[..., None]
+    nx = np.where(wrap, sx[..., :1], np.roll(sx, -1, axis=-1))
+    ny = np.where(wrap, sy[..., :1], np.roll(sy, -1, axis=-1))
+    cross = np.where(idx < count[..., None], sx * ny - sy * nx, 0.0)
+    return np.where(count >= 3, np.abs(np.nansum(cross, axis=-1)) / 2, 0.0)
+
+
+@settings(max_examples=30, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), slots=st.sampled_from([4, 12, 24, 60, 112, 180]))
+def test_polygon_areas_are_the_array_formulas_bit_for_bit(seed, slots):
+    # convex polygons (points of an ellipse), some corners repeated, others not kept
+    rng = np.random.default_rng(seed)
+    t = rng.uniform(0, 2 * np.pi, (6, 4, slots))
+    vx = 20 * np.cos(t) + rng.normal() * 50
+    vy = 7 * np.sin(t) + rng.normal() * 50
+    vx[..., 1::2], vy[..., 1::2] = vx[..., ::2][..., : slots // 2], vy[..., ::2][..., : slots // 2]
+    ok = rng.random(vx.shape) < rng.uniform(0.05, 1.0)
+    found = _polygon_areas(vx, vy, ok)
+    assert np.array_equal(found, _areas_by_arrays(vx, vy, ok))
+    corners = np.array([[[[0.0, 2, 2, 0]]], [[[0.0, 0, 2, 2]]]])  # a 2 x 2 square
+    assert _polygon_areas(*corners, np.ones((1, 1, 4), bool))[0, 0] == 4.0
