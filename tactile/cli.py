@@ -58,7 +58,9 @@ def cmd_bench(args: argparse.Namespace) -> int:
                     plans.append({**error, **s.__dict__})
             if args.no_recognition:
                 continue
-            stats = recognition_stats(models, bounds, workspace, args.trials, 3, args.seed)
+            stats = recognition_stats(
+                models, bounds, workspace, args.trials, 3, args.seed, args.repeat
+            )
             growth = {}
             if args.growth:
                 growth = update_growth(models, bounds, workspace, args.growth, 2, args.seed)
@@ -256,7 +258,12 @@ def build_parser() -> argparse.ArgumentParser:
         metavar="N",
         help="also time the updates of a session touched N times (e.g. 40)",
     )
-    bench.add_argument("--repeat", type=int, default=1, help="runs per plan (median kept)")
+    bench.add_argument(
+        "--repeat",
+        type=int,
+        default=1,
+        help="runs per plan (median kept) and replays per recognition trial (shortest kept)",
+    )
     bench.add_argument(
         "--no-exact",
         action="store_true",

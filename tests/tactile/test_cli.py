@@ -33,6 +33,18 @@ def test_bench_without_exact_sensing_times_the_error_case_only(capsys):
     assert [(r["position_error"], r["normal_error_deg"]) for r in rows] == [(1.0, 3.0)]
 
 
+def test_bench_replays_keep_the_counts_and_the_shortest_times(capsys):
+    argv = ["bench", "--sets", "symmetric", "--trials", "3", "--no-exact", "--json"]
+    assert main(argv) == 0
+    once = json.loads(capsys.readouterr().out)["recognition"][0]
+    assert main([*argv, "--repeat", "3"]) == 0
+    replayed = json.loads(capsys.readouterr().out)["recognition"][0]
+    # the same worlds and touches: the same hypotheses; times are only measured
+    assert replayed["hypotheses_after"] == once["hypotheses_after"]
+    assert replayed["classes_after"] == once["classes_after"]
+    assert replayed["update_p95_ms"] >= replayed["update_p50_ms"] > 0
+
+
 def test_bench_planning_reports_plan_times_and_work_after_0_to_3_touches(capsys):
     argv = ["bench", "--sets", "symmetric", "--planning", "--no-recognition", "--json"]
     assert (
