@@ -348,8 +348,7 @@ class SessionService:
         observation = observation_from_dict(body)  # planner checks: zero vectors, behind origin
         stored = observation_to_dict(observation)
         cap = self.settings.max_observations_per_session
-        most = self.settings.max_hypotheses
-        work = self.settings.max_interpretation_work
+        most, work = self.settings.max_hypotheses, self.settings.max_interpretation_work
 
         def step(record: SessionRecord, session: Session) -> Session:
             if len(record.observations) >= cap:

@@ -8,7 +8,7 @@ from hypothesis import strategies as st
 from scipy.spatial import ConvexHull, QhullError
 
 from planner.geometry import rotation_matrices
-from planner.recognition.consistent import _pairwise_sum, _polygon_areas, _polygons
+from planner.recognition.polygons import pairwise_sum, polygon_areas, slab_polygons
 
 
 def _slow_polygons(points, face_normals, face_offsets, use, theta, d_theta, width):
@@ -65,7 +65,7 @@ def test_one_slab_per_face_gives_the_polygon_of_one_slab_per_contact(seed, conta
     theta = rng.uniform(-0.05, 0.05, K)
     d_theta = rng.uniform(-0.02, 0.02, (K, N))
     width = rng.uniform(0.2, 0.6, K)
-    vx, vy, ok, _ = _polygons(points, fn, fo, use, theta, d_theta, width)
+    vx, vy, ok, _ = slab_polygons(points, fn, fo, use, theta, d_theta, width)
     rx, ry, rok = _slow_polygons(points, fn, fo, use, theta, d_theta, width)
     for k in range(K):
         for m in range(N):
@@ -80,7 +80,7 @@ def test_one_slab_per_face_gives_the_polygon_of_one_slab_per_contact(seed, conta
 def test_the_compiled_sum_adds_as_numpy_does(seed, n):
     rng = np.random.default_rng(seed)
     a = rng.normal(size=n) * 10.0 ** rng.uniform(-5, 5, n)  # magnitudes that round
-    assert _pairwise_sum(a, 0, n) == a.sum()
+    assert pairwise_sum(a, 0, n) == a.sum()
 
 
 def _areas_by_arrays(vx, vy, ok):
@@ -110,7 +110,7 @@ def test_polygon_areas_are_the_array_formulas_bit_for_bit(seed, slots):
     vy = 7 * np.sin(t) + rng.normal() * 50
     vx[..., 1::2], vy[..., 1::2] = vx[..., ::2][..., : slots // 2], vy[..., ::2][..., : slots // 2]
     ok = rng.random(vx.shape) < rng.uniform(0.05, 1.0)
-    found = _polygon_areas(vx, vy, ok)
+    found = polygon_areas(vx, vy, ok)
     assert np.array_equal(found, _areas_by_arrays(vx, vy, ok))
     corners = np.array([[[[0.0, 2, 2, 0]]], [[[0.0, 0, 2, 2]]]])  # a 2 x 2 square
-    assert _polygon_areas(*corners, np.ones((1, 1, 4), bool))[0, 0] == 4.0
+    assert polygon_areas(*corners, np.ones((1, 1, 4), bool))[0, 0] == 4.0

@@ -15,8 +15,8 @@ from planner.recognition.consistent import (
     consistent_poses,
     consistent_set_bounds,
     consistent_volume,
-    latest_faces,
 )
+from planner.recognition.polygons import latest_faces
 from planner.recognition.pose_fit import PoseFilter, fit_batch, noise_scales, point_bounds
 from planner.types import Pose, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set
