@@ -17,6 +17,9 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 
 from __future__ import annotations
 
+import hashlib
+import threading
+from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
@@ -24,7 +27,13 @@ import numpy as np
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
 from planner.types import Contact, Faces, StablePose
 
-__all__ = ["ConstraintTables", "build_tables", "pair_feasibility", "unary_feasibility"]
+__all__ = [
+    "ConstraintTables",
+    "build_tables",
+    "pair_feasibility",
+    "shared_tables",
+    "unary_feasibility",
+]
 
 #: Relative slack (of the object size) added to every length bound, and absolute
 #: slack (radians) added to every angle bound, so the bounds' edges pass.
@@ -68,6 +77,38 @@ def build_tables(faces: Faces) -> ConstraintTables:
         c_max=proj.max(axis=0),
         scale=scale,
     )
+
+
+#: Table cells (faces squared, summed over the stable poses) the process keeps.
+SHARED_CELLS = 500_000
+_shared: OrderedDict[bytes, ConstraintTables] = OrderedDict()
+_shared_lock = threading.Lock()
+
+
+def shared_tables(faces: Faces) -> ConstraintTables:
+    """:func:`build_tables` of `faces`, kept for the process: sessions on the same
+    parts (a robot cell's library) build each stable pose's tables once, not at
+    every session's second touch. Keyed by the faces' numbers, least recently used
+    dropped past :data:`SHARED_CELLS`; the arrays are read-only."""
+    digest = hashlib.blake2b(digest_size=16)
+    for name in ("start", "end", "normal", "offset"):
+        digest.update(np.ascontiguousarray(getattr(faces, name), dtype=float).tobytes())
+    key = digest.digest()
+    with _shared_lock:
+        found = _shared.get(key)
+        if found is not None:
+            _shared.move_to_end(key)
+            return found
+    tables = build_tables(faces)
+    for array in (tables.d_min, tables.d_max, tables.angle, tables.c_min, tables.c_max):
+        array.setflags(write=False)
+    with _shared_lock:
+        _shared[key] = tables
+        cells = sum(t.d_min.size for t in _shared.values())
+        while cells > SHARED_CELLS and len(_shared) > 1:
+            _, dropped = _shared.popitem(last=False)
+            cells -= dropped.d_min.size
+    return tables
 
 
 def pair_feasibility(

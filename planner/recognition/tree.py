@@ -18,8 +18,8 @@ from planner.memo import cached_property
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
     ConstraintTables,
-    build_tables,
     pair_feasibility,
+    shared_tables,
     unary_feasibility,
 )
 from planner.types import Contact, ObjectModel, SensorBounds, StablePose
@@ -44,7 +44,7 @@ class Group:
     def tables(self) -> ConstraintTables:
         """The tables of every layer's faces together: contacts at different
         heights constrain each other as faces of one rigid pose do."""
-        return build_tables(self.stable.all_faces)
+        return shared_tables(self.stable.all_faces)
 
     def shrunk(self, tol: float, layer: int = 0) -> shapely.Geometry:
         """The model outline of `layer` shrunk by `tol` (cached per tolerance

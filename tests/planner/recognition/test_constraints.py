@@ -9,6 +9,7 @@ import pytest
 
 from planner.geometry import wrap_angle
 from planner.models.outlines import make_stable_pose
+from planner.recognition import constraints
 from planner.recognition.constraints import ConstraintTables, build_tables, pair_feasibility
 from planner.types import Contact, Faces
 from tests.conftest import SET_NAMES, object_set
@@ -69,3 +70,23 @@ def test_error_widens_every_check():
     tilted = Contact((10, 5), (math.cos(0.05), math.sin(0.05)))
     assert not pair_feasibility(t, a, tilted, 0.0, 0.0)[0, 1]
     assert pair_feasibility(t, a, tilted, 0.0, 0.03)[0, 1]
+
+
+def test_tables_are_built_once_per_stable_pose_and_the_process_keeps_a_bounded_number(
+    monkeypatch,
+):
+    monkeypatch.setattr(constraints, "_shared", type(constraints._shared)())
+    square = [[0, 0], [2, 0], [2, 2], [0, 2]]
+    first = constraints.shared_tables(make_stable_pose(square).faces)
+    again = constraints.shared_tables(make_stable_pose(square).faces)  # another session's part
+    assert again is first
+    built = build_tables(make_stable_pose(square).faces)
+    for name in ("d_min", "d_max", "angle", "c_min", "c_max"):
+        assert np.array_equal(getattr(first, name), getattr(built, name))
+        assert not getattr(first, name).flags.writeable
+    other = constraints.shared_tables(make_stable_pose([[0, 0], [3, 0], [0, 3]]).faces)
+    assert other is not first and other.d_min.shape == (3, 3)
+    # past the cell budget the least recently used go first
+    monkeypatch.setattr(constraints, "SHARED_CELLS", 16 + 9)
+    constraints.shared_tables(make_stable_pose([[0, 0], [4, 0], [4, 1], [0, 1]]).faces)
+    assert constraints.shared_tables(make_stable_pose(square).faces) is not first
