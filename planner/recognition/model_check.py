@@ -19,7 +19,7 @@ import numba
 import numpy as np
 import shapely
 
-from planner.compiled import c_array
+from planner.compiled import c_array, segment_gap
 from planner.geometry import (
     ANGLE_SLACK,
     LENGTH_SLACK,
@@ -81,13 +81,14 @@ def contacts_on_faces(
     assigned: np.ndarray,
     theta: np.ndarray,
     t: np.ndarray,
-    tol: np.ndarray,
+    tol: np.ndarray | float,
 ) -> np.ndarray:
     """(K, M) does every assigned contact (`points` (s, 2)) lie within `tol` (K, M)
     of its FINITE face (`face`, `assigned` (K, s)) posed at ``theta`` (K, M), ``t``
     (K, M, 2)? One pass per pose that stops at the first contact off its face,
-    with the arithmetic of :func:`planner.geometry.point_segment_distance` on the
-    faces posed as :func:`planner.geometry.rotate` poses them."""
+    measuring with :func:`planner.compiled.segment_gap` (the arithmetic of
+    :func:`planner.geometry.point_segment_distance`) on the faces posed as
+    :func:`planner.geometry.rotate` poses them; `tol` may be one number for all."""
     out = np.ones(theta.shape, dtype=bool)
     _on_faces(
         c_array(points, dtype=float),
@@ -116,14 +117,15 @@ def _on_faces(points, starts, ends, face, assigned, cos, sin, t, tol, out):  # t
                 if not assigned[k, j]:
                     continue
                 f = face[k, j]
-                ax = c * starts[f, 0] + -s * starts[f, 1] + tx
-                ay = s * starts[f, 0] + c * starts[f, 1] + ty
-                ex = (c * ends[f, 0] + -s * ends[f, 1] + tx) - ax
-                ey = (s * ends[f, 0] + c * ends[f, 1] + ty) - ay
-                sq = max(ex * ex + ey * ey, 1e-300)
-                px, py = points[j, 0], points[j, 1]
-                u = min(max(((px - ax) * ex + (py - ay) * ey) / sq, 0.0), 1.0)
-                if math.hypot(px - (ax + u * ex), py - (ay + u * ey)) > tol[k, m]:
+                gap_x, gap_y = segment_gap(
+                    points[j, 0],
+                    points[j, 1],
+                    c * starts[f, 0] + -s * starts[f, 1] + tx,
+                    s * starts[f, 0] + c * starts[f, 1] + ty,
+                    c * ends[f, 0] + -s * ends[f, 1] + tx,
+                    s * ends[f, 0] + c * ends[f, 1] + ty,
+                )
+                if math.hypot(gap_x, gap_y) > tol[k, m]:
                     out[k, m] = False
                     break
 

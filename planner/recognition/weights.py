@@ -177,9 +177,7 @@ def _admitted_share(
     1 where no pose is spread)."""
     K, M = valid.shape
     faces = group.stable.all_faces
-    good = valid & contacts_on_faces(
-        P, faces, face, assigned, theta, t, np.full((K, M), eps_d + floor)
-    )
+    good = valid & contacts_on_faces(P, faces, face, assigned, theta, t, eps_d + floor)
     clear = clear_paths(
         group,
         observations,

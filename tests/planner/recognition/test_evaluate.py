@@ -494,3 +494,6 @@ def test_contacts_on_faces_is_the_distance_to_each_posed_segment(seed, contacts,
     expected = np.all(~assigned[:, None] | (dist <= tol[..., None]), axis=-1)
     found = contacts_on_faces(points, faces, face, assigned, theta, t, tol)
     assert np.array_equal(found, expected)
+    one = float(tol[0, 0])  # one tolerance for every pose
+    same = np.all(~assigned[:, None] | (dist <= one), axis=-1)
+    assert np.array_equal(contacts_on_faces(points, faces, face, assigned, theta, t, one), same)
