@@ -18,6 +18,7 @@ of its own:
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -27,17 +28,18 @@ from planner.geometry import LENGTH_SLACK, wrap_angle
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import free_space_check, inside_workspace, model_check
 from planner.recognition.poses import (
+    PoseFit,
     fit_bounds,
-    fit_poses,
+    fit_poses_of_groups,
     rotation_gate,
     sample_bounds,
     slide_samples,
 )
 from planner.recognition.tree import Group
 from planner.recognition.weights import residual_fitness, weights
-from planner.types import Observation, PosePrior, SensorBounds, StablePose, Workspace
+from planner.types import Faces, Observation, PosePrior, SensorBounds, StablePose, Workspace
 
-__all__ = ["PoseSamples", "evaluate"]
+__all__ = ["PoseSamples", "evaluate", "evaluate_groups"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,27 +97,127 @@ def evaluate(
     length_scale: float,
 ) -> PoseSamples:
     """Fit, sample and model-check every row of one group against all observations."""
+    (out,) = evaluate_groups(
+        [group], [rows], observations, bounds, workspace, config, length_scale, [group_index]
+    )
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Contacts:
+    """The contacts of the observations (s of them): `points`, `normals` (s, 2), the
+    normals' angles `psi` (s,) and the `directions` (s, 2) of the paths that met them."""
+
+    points: np.ndarray
+    normals: np.ndarray
+    psi: np.ndarray
+    directions: np.ndarray
+
+    @classmethod
+    def of(cls, observations: list[Observation]) -> _Contacts:
+        contacts = [o.contact for o in observations if o.contact is not None]
+        normals = np.array([c.normal for c in contacts])
+        return cls(
+            np.array([c.point for c in contacts]),
+            normals,
+            np.arctan2(normals[:, 1], normals[:, 0]),
+            np.array([o.path.direction for o in observations if o.contact is not None]),
+        )
+
+
+@dataclass(frozen=True, eq=False)
+class _Gated:
+    """The rows of one group that assign a contact and pass the rotation gate:
+    `keep` their indices among the group's rows, `face` and `assigned` (K, s)."""
+
+    keep: np.ndarray
+    face: np.ndarray
+    assigned: np.ndarray
+
+
+def _gated(rows: np.ndarray, faces: Faces, psi: np.ndarray, phi: float) -> _Gated | None:
+    """Step 1's gate on one group's `rows` (None when no row is left)."""
+    assigned = rows >= 0
+    keep = np.flatnonzero(assigned.any(axis=1)) if rows.size else np.zeros(0, np.int64)
+    if keep.size == 0:
+        return None
+    rows, assigned = rows[keep], assigned[keep]
+    face = np.maximum(rows, 0)
+    gate = rotation_gate(psi, faces.angle[face], assigned, phi)
+    if not gate.any():
+        return None
+    return _Gated(keep[gate], face[gate], assigned[gate])
+
+
+def evaluate_groups(
+    groups: Sequence[Group],
+    rows: Sequence[np.ndarray],
+    observations: list[Observation],
+    bounds: SensorBounds,
+    workspace: Workspace,
+    config: RecognitionConfig,
+    length_scale: float,
+    indices: Sequence[int] | None = None,
+) -> list[PoseSamples]:
+    """:func:`evaluate` of every group (its `rows` each, numbered by `indices`,
+    default their places): the pose fits of all groups in one pass (each row's fit
+    is its own), the steps that depend on a group's outline group by group."""
+    indices = range(len(groups)) if indices is None else indices
+    out = [_no_samples(g) for g in indices]
+    if all(o.contact is None for o in observations):
+        return out
+    contacts = _Contacts.of(observations)
+    P, U, psi = contacts.points, contacts.normals, contacts.psi
+    phi = bounds.normal_error
+    gated = [_gated(r, g.stable.all_faces, psi, phi) for g, r in zip(groups, rows, strict=True)]
+    live = [k for k, x in enumerate(gated) if x is not None]
+    if not live:
+        return out
+    fits = fit_poses_of_groups(
+        [groups[k].stable for k in live],
+        P,
+        U,
+        [gated[k].face for k in live],  # type: ignore[union-attr]
+        [gated[k].assigned for k in live],  # type: ignore[union-attr]
+        bounds.position_error,
+        phi,
+        length_scale,
+    )
+    for k, pose in zip(live, fits, strict=True):
+        out[k] = _checked(
+            indices[k],
+            groups[k],
+            gated[k],  # type: ignore[arg-type]
+            pose,
+            observations,
+            contacts,
+            bounds,
+            workspace,
+            config,
+            length_scale,
+        )
+    return out
+
+
+def _checked(
+    group_index: int,
+    group: Group,
+    gated: _Gated,
+    pose: PoseFit,
+    observations: list[Observation],
+    contacts: _Contacts,
+    bounds: SensorBounds,
+    workspace: Workspace,
+    config: RecognitionConfig,
+    length_scale: float,
+) -> PoseSamples:
+    """Steps 2-7 on one group's fitted rows."""
     eps_d, phi = bounds.position_error, bounds.normal_error
     stable = group.stable
     faces = stable.all_faces
     slack = LENGTH_SLACK * length_scale * 10
-    contact_obs = [o for o in observations if o.contact is not None]
-    assigned = rows >= 0
-    keep = np.flatnonzero(assigned.any(axis=1)) if rows.size else np.zeros(0, np.int64)
-    if keep.size == 0 or not contact_obs:
-        return _no_samples(group_index)
-    rows, assigned = rows[keep], assigned[keep]
-    face = np.maximum(rows, 0)
-    P = np.array([o.contact.point for o in contact_obs])  # type: ignore[union-attr]
-    U = np.array([o.contact.normal for o in contact_obs])  # type: ignore[union-attr]
-    psi = np.arctan2(U[:, 1], U[:, 0])
-
-    gate = rotation_gate(psi, faces.angle[face], assigned, phi)
-    assigned, face, keep = assigned[gate], face[gate], keep[gate]
-    if face.shape[0] == 0:
-        return _no_samples(group_index)
-
-    pose = fit_poses(stable, P, U, face, assigned, eps_d, phi, length_scale)
+    P, U, psi = contacts.points, contacts.normals, contacts.psi
+    keep, face, assigned = gated.keep, gated.face, gated.assigned
     fit_bound = fit_bounds(pose, stable, assigned, eps_d, phi, config, slack)
     samples = slide_samples(
         pose,
@@ -145,8 +247,9 @@ def evaluate(
     fitness = residual_fitness(
         group, observations, pose, samples, P, U, face, assigned, ok, eps_d, phi, config, slack
     )
-    dirs = np.array([o.path.direction for o in contact_obs])
-    weight = weights(group.prior, pose, samples, faces, f_src, a_src, dirs, fitness, config)
+    weight = weights(
+        group.prior, pose, samples, faces, f_src, a_src, contacts.directions, fitness, config
+    )
 
     sel = np.flatnonzero(ok & (weight > 0))
     return PoseSamples(

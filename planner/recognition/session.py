@@ -41,7 +41,7 @@ from planner.recognition.equivalence import (
     PosedRings,
     equivalence_classes,
 )
-from planner.recognition.evaluate import PoseSamples, evaluate
+from planner.recognition.evaluate import PoseSamples, evaluate_groups
 from planner.recognition.tree import Group, TreeLevel, extend, make_groups
 from planner.types import (
     Accuracy,
@@ -239,20 +239,18 @@ class Session:
         if level is None:  # no observation at all
             empty = tuple(np.zeros((1, 0), np.int64) for _ in self._groups)
             return _Derived(TreeLevel(rows=empty), ())
-        seen = self.surface_observations
+        found = evaluate_groups(
+            self._groups,
+            level.rows,
+            list(self.surface_observations),
+            self.bounds,
+            self.workspace,
+            self.config,
+            self.length_scale,
+        )
         candidates = []
         rows_kept = []
-        for g, (group, rows) in enumerate(zip(self._groups, level.rows, strict=True)):
-            cand = evaluate(
-                g,
-                group,
-                rows,
-                list(seen),
-                self.bounds,
-                self.workspace,
-                self.config,
-                self.length_scale,
-            )
+        for rows, cand in zip(level.rows, found, strict=True):
             latent = (
                 np.flatnonzero(~(rows >= 0).any(axis=1)) if rows.shape[1] else np.arange(len(rows))
             )

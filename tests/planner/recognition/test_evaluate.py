@@ -14,7 +14,7 @@ from hardware_sim.world import World, random_world
 from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices, wrap_angle
 from planner.models.outlines import make_stable_pose
 from planner.recognition.config import RecognitionConfig
-from planner.recognition.evaluate import evaluate
+from planner.recognition.evaluate import evaluate, evaluate_groups
 from planner.recognition.model_check import (
     contacts_on_faces,
     free_space_check,
@@ -497,3 +497,28 @@ def test_contacts_on_faces_is_the_distance_to_each_posed_segment(seed, contacts,
     one = float(tol[0, 0])  # one tolerance for every pose
     same = np.all(~assigned[:, None] | (dist <= one), axis=-1)
     assert np.array_equal(contacts_on_faces(points, faces, face, assigned, theta, t, one), same)
+
+
+@settings(max_examples=12, derandomize=True, deadline=None)
+@given(
+    set_name=st.sampled_from(SET_NAMES), seed=st.integers(0, 2**32 - 1), touches=st.integers(1, 4)
+)
+def test_groups_evaluated_together_are_each_evaluated_alone_bit_for_bit(set_name, seed, touches):
+    """The fits of every group's rows share one pass: each group still gets the
+    numbers a pass over its rows alone gives (the same bits, so the same plans)."""
+    models = object_set(set_name)
+    rng = np.random.default_rng(seed)
+    world = random_world(models, WORKSPACE, rng)
+    groups = make_groups(models)
+    level = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in groups))
+    obs = []
+    for _ in range(touches):
+        obs.append(world.execute(world.hitting_path(rng), BOUNDS, rng)[0])
+        level = extend(level, groups, [o.contact for o in obs], BOUNDS, CONFIG)
+    together = evaluate_groups(groups, level.rows, obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
+    assert sum(len(c.weight) for c in together) > 0  # the true interpretation at least
+    for g, both in enumerate(together):
+        alone = evaluate(g, groups[g], level.rows[g], obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
+        assert both.group == alone.group == g
+        for name in ("row", "theta", "t", "d_translation", "d_theta", "eps_t", "cell", "weight"):
+            np.testing.assert_array_equal(getattr(both, name), getattr(alone, name), err_msg=name)
