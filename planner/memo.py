@@ -1,18 +1,32 @@
-"""A lock-free cached property.
+"""A lock-free cached property, and values kept for the process.
 
 ``functools.cached_property`` on Python 3.11 holds one lock per property shared
 by every instance, so threads computing the property on different objects (two
 sessions served at once) wait for each other. This descriptor stores the value
 in the instance like the 3.12 version does: two threads racing on one object may
 both compute it, which is harmless for the pure computations it caches.
+
+:class:`SharedCache` keeps what sessions on the same parts would each compute
+again (a robot cell works on one library): keyed by the parts' numbers, the least
+recently used dropped past a bound on the values' total size.
+
+>>> cache = SharedCache(limit=5, size=len)
+>>> cache.get("ab", lambda: "xy"), cache.get("ab", lambda: "other")
+('xy', 'xy')
+>>> cache.get("cd", lambda: "uvw"), cache.get("ab", lambda: "again")  # 2 + 3 <= 5
+('uvw', 'xy')
+>>> cache.get("ef", lambda: "z"), cache.get("cd", lambda: "new")  # "cd" was the oldest
+('z', 'new')
 """
 
 from __future__ import annotations
 
-from collections.abc import Callable
+import threading
+from collections import OrderedDict
+from collections.abc import Callable, Hashable
 from typing import Any, Generic, TypeVar, overload
 
-__all__ = ["cached_property"]
+__all__ = ["SharedCache", "cached_property"]
 
 T = TypeVar("T")
 
@@ -36,3 +50,38 @@ class cached_property(Generic[T]):  # noqa: N801 - named after the functools ori
         value = self.func(instance)
         instance.__dict__[self.attrname] = value  # type: ignore[index]
         return value
+
+
+class SharedCache(Generic[T]):
+    """Values kept for the process, least recently used dropped once their total
+    `size` passes `limit` (the newest is kept whatever its size). Thread-safe; a
+    value two threads make at once is made twice and either is kept, harmless for
+    the pure computations it holds."""
+
+    def __init__(self, limit: int, size: Callable[[T], int]) -> None:
+        self.limit = limit
+        self._size = size
+        self._values: OrderedDict[Hashable, tuple[T, int]] = OrderedDict()
+        self._total = 0
+        self._lock = threading.Lock()
+
+    def get(self, key: Hashable, make: Callable[[], T]) -> T:
+        """The value kept for `key`, made by `make` (outside the lock) if none is."""
+        with self._lock:
+            found = self._values.get(key)
+            if found is not None:
+                self._values.move_to_end(key)
+                return found[0]
+        value = make()
+        units = self._size(value)
+        with self._lock:
+            old = self._values.pop(key, None)
+            self._total += units - (old[1] if old is not None else 0)
+            self._values[key] = (value, units)
+            while self._total > self.limit and len(self._values) > 1:
+                _, (_, dropped) = self._values.popitem(last=False)
+                self._total -= dropped
+        return value
+
+    def __len__(self) -> int:
+        return len(self._values)

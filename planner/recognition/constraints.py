@@ -18,13 +18,12 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 from __future__ import annotations
 
 import hashlib
-import threading
-from collections import OrderedDict
 from dataclasses import dataclass
 
 import numpy as np
 
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
+from planner.memo import SharedCache
 from planner.types import Contact, Faces, StablePose
 
 __all__ = [
@@ -81,8 +80,7 @@ def build_tables(faces: Faces) -> ConstraintTables:
 
 #: Table cells (faces squared, summed over the stable poses) the process keeps.
 SHARED_CELLS = 500_000
-_shared: OrderedDict[bytes, ConstraintTables] = OrderedDict()
-_shared_lock = threading.Lock()
+_shared: SharedCache[ConstraintTables] = SharedCache(SHARED_CELLS, lambda t: t.d_min.size)
 
 
 def shared_tables(faces: Faces) -> ConstraintTables:
@@ -93,21 +91,12 @@ def shared_tables(faces: Faces) -> ConstraintTables:
     digest = hashlib.blake2b(digest_size=16)
     for name in ("start", "end", "normal", "offset"):
         digest.update(np.ascontiguousarray(getattr(faces, name), dtype=float).tobytes())
-    key = digest.digest()
-    with _shared_lock:
-        found = _shared.get(key)
-        if found is not None:
-            _shared.move_to_end(key)
-            return found
-    tables = build_tables(faces)
+    return _shared.get(digest.digest(), lambda: _read_only(build_tables(faces)))
+
+
+def _read_only(tables: ConstraintTables) -> ConstraintTables:
     for array in (tables.d_min, tables.d_max, tables.angle, tables.c_min, tables.c_max):
         array.setflags(write=False)
-    with _shared_lock:
-        _shared[key] = tables
-        cells = sum(t.d_min.size for t in _shared.values())
-        while cells > SHARED_CELLS and len(_shared) > 1:
-            _, dropped = _shared.popitem(last=False)
-            cells -= dropped.d_min.size
     return tables
 
 

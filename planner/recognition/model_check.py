@@ -211,7 +211,7 @@ def clear_paths(
         ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
         for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
             z, value = divmod(int(kind), len(values))
-            crossed = shapely.intersects(lines[sel], group.shrunk(float(values[value]), z))
+            crossed = group.crossed(lines[sel], float(values[value]), z)
             keep[i[sel[crossed]]] = False
     return keep
 

@@ -9,12 +9,14 @@ then the model check on the fitted pose (:mod:`planner.recognition.evaluate`).
 
 from __future__ import annotations
 
+import hashlib
+import threading
 from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
 
-from planner.memo import cached_property
+from planner.memo import SharedCache, cached_property
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
     ConstraintTables,
@@ -46,16 +48,53 @@ class Group:
         heights constrain each other as faces of one rigid pose do."""
         return shared_tables(self.stable.all_faces)
 
-    def shrunk(self, tol: float, layer: int = 0) -> shapely.Geometry:
-        """The model outline of `layer` shrunk by `tol` (cached per tolerance
-        bucket), prepared."""
-        cache = self.__dict__.setdefault("_shrunk", {})
-        if (tol, layer) not in cache:
-            shape = self.stable.layers[layer].shape
-            geom = shape.buffer(-tol, join_style="mitre") if tol > 0 else shape
-            shapely.prepare(geom)
-            cache[tol, layer] = geom
-        return cache[tol, layer]
+    def crossed(self, lines: np.ndarray, tol: float, layer: int = 0) -> np.ndarray:
+        """Which `lines` (shapely line strings, model frame) cross the outline of
+        `layer` shrunk by `tol` (a tolerance bucket). The shrunk outlines are kept
+        for the process (:data:`SHRUNK_COORDINATES`): sessions on the same parts
+        shrink each once."""
+        key = (self._layer_keys[layer], tol)
+        found = _shrunk.get(key, lambda: _Shrunk.of(self.stable.layers[layer].shape, tol))
+        return found.crossed(lines)
+
+    @cached_property
+    def _layer_keys(self) -> list[bytes]:
+        """Each layer's outline and holes as a key (its numbers' digest)."""
+        keys = []
+        for layer in self.stable.layers:
+            digest = hashlib.blake2b(digest_size=16)
+            for ring in (layer.outline, *layer.holes):
+                digest.update(np.ascontiguousarray(ring, dtype=float).tobytes() + b"|")
+            keys.append(digest.digest())
+        return keys
+
+
+#: Vertices of shrunk outlines the process keeps.
+SHRUNK_COORDINATES = 1_000_000
+
+
+@dataclass(frozen=True, eq=False)
+class _Shrunk:
+    """A shrunk outline, prepared, and the lock its tests take: a prepared geometry
+    builds its indexes on first use and is not safe to test from two threads at once."""
+
+    geometry: shapely.Geometry
+    lock: threading.Lock
+
+    @classmethod
+    def of(cls, shape: shapely.Geometry, tol: float) -> _Shrunk:
+        geom = shape.buffer(-tol, join_style="mitre") if tol > 0 else shape
+        shapely.prepare(geom)
+        return cls(geom, threading.Lock())
+
+    def crossed(self, lines: np.ndarray) -> np.ndarray:
+        with self.lock:
+            return shapely.intersects(lines, self.geometry)
+
+
+_shrunk: SharedCache[_Shrunk] = SharedCache(
+    SHRUNK_COORDINATES, lambda s: int(shapely.get_num_coordinates(s.geometry))
+)
 
 
 def make_groups(models: list[ObjectModel]) -> list[Group]:

@@ -8,6 +8,7 @@ import numpy as np
 import pytest
 
 from planner.geometry import wrap_angle
+from planner.memo import SharedCache
 from planner.models.outlines import make_stable_pose
 from planner.recognition import constraints
 from planner.recognition.constraints import ConstraintTables, build_tables, pair_feasibility
@@ -75,7 +76,8 @@ def test_error_widens_every_check():
 def test_tables_are_built_once_per_stable_pose_and_the_process_keeps_a_bounded_number(
     monkeypatch,
 ):
-    monkeypatch.setattr(constraints, "_shared", type(constraints._shared)())
+    fresh = SharedCache(constraints.SHARED_CELLS, lambda t: t.d_min.size)
+    monkeypatch.setattr(constraints, "_shared", fresh)
     square = [[0, 0], [2, 0], [2, 2], [0, 2]]
     first = constraints.shared_tables(make_stable_pose(square).faces)
     again = constraints.shared_tables(make_stable_pose(square).faces)  # another session's part
@@ -87,6 +89,6 @@ def test_tables_are_built_once_per_stable_pose_and_the_process_keeps_a_bounded_n
     other = constraints.shared_tables(make_stable_pose([[0, 0], [3, 0], [0, 3]]).faces)
     assert other is not first and other.d_min.shape == (3, 3)
     # past the cell budget the least recently used go first
-    monkeypatch.setattr(constraints, "SHARED_CELLS", 16 + 9)
+    monkeypatch.setattr(fresh, "limit", 16 + 9)
     constraints.shared_tables(make_stable_pose([[0, 0], [4, 0], [4, 1], [0, 1]]).faces)
     assert constraints.shared_tables(make_stable_pose(square).faces) is not first

@@ -4,15 +4,19 @@ error bounds, slide-family samples, model check, free-space check, weights."""
 from __future__ import annotations
 
 import math
+from concurrent.futures import ThreadPoolExecutor
 
 import numpy as np
 import pytest
+import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import World, random_world
 from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices, wrap_angle
+from planner.memo import SharedCache
 from planner.models.outlines import make_stable_pose
+from planner.recognition import tree
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.evaluate import evaluate, evaluate_groups
 from planner.recognition.model_check import (
@@ -522,3 +526,31 @@ def test_groups_evaluated_together_are_each_evaluated_alone_bit_for_bit(set_name
         assert both.group == alone.group == g
         for name in ("row", "theta", "t", "d_translation", "d_theta", "eps_t", "cell", "weight"):
             np.testing.assert_array_equal(getattr(both, name), getattr(alone, name), err_msg=name)
+
+
+def test_shrunk_outlines_are_made_once_per_part_and_tolerance_for_the_process(monkeypatch):
+    fresh = SharedCache(tree.SHRUNK_COORDINATES, lambda s: 1)
+    monkeypatch.setattr(tree, "_shrunk", fresh)
+    # two sessions' copies of one part
+    a, b = (make_groups(object_set("thesis_like"))[0] for _ in range(2))
+    assert a.stable is not b.stable
+    cx, cy = a.stable.centroid
+    lines = shapely.linestrings(
+        [[[cx - 500, cy], [cx + 500, cy]], [[cx - 500, cy + 900], [cx, cy + 900]]]
+    )
+    expected = shapely.intersects(lines, a.stable.shape.buffer(-1.0, join_style="mitre"))
+    assert expected.tolist() == [True, False]
+    assert a.crossed(lines, 1.0).tolist() == expected.tolist() and len(fresh) == 1
+    assert b.crossed(lines, 1.0).tolist() == expected.tolist() and len(fresh) == 1
+    b.crossed(lines, 2.0)
+    assert len(fresh) == 2
+    monkeypatch.setattr(fresh, "limit", 1)  # past the bound the least recently used go
+    b.crossed(lines, 3.0)
+    assert len(fresh) == 1
+    # one prepared outline tested from several threads at once gives the same answers
+    ends = np.random.default_rng(0).uniform(-80, 80, (400, 2, 2))
+    many = shapely.linestrings(ends + np.array([cx, cy]))
+    alone = a.crossed(many, 3.0)
+    with ThreadPoolExecutor(4) as pool:
+        answers = list(pool.map(lambda _: a.crossed(many, 3.0), range(16)))
+    assert all(np.array_equal(x, alone) for x in answers)
