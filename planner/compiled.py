@@ -10,6 +10,11 @@ aligned, of the kernel's dtype (copied only when it is not so already).
 
 >>> c_array(np.broadcast_to(np.arange(3.0), (2, 3))).flags.writeable
 True
+>>> a = np.zeros((2, 3))
+>>> c_array(a) is a, c_array(a, float) is a, c_array(a[:, ::2]).flags.c_contiguous
+(True, True, True)
+>>> c_array(np.arange(3), dtype=float).dtype, c_array(a, dtype=np.float32).dtype
+(dtype('float64'), dtype('float32'))
 >>> segment_gap(1.0, 1.0, 0.0, 0.0, 2.0, 0.0)
 (0.0, 1.0)
 """
@@ -24,7 +29,13 @@ __all__ = ["c_array", "outward", "segment_gap"]
 
 
 def c_array(a: np.ndarray | float, dtype: DTypeLike = None) -> np.ndarray:
-    """`a` as a C-ordered, writable, aligned array of `dtype` (default: its own)."""
+    """`a` as a C-ordered, writable, aligned array of `dtype` (default: its own).
+    An array that is so already comes back as it is, without `np.require`'s
+    checks (a kernel call passes a dozen arrays, most of them so)."""
+    if type(a) is np.ndarray and (dtype is None or a.dtype == dtype):
+        flags = a.flags
+        if flags.c_contiguous and flags.writeable and flags.aligned:
+            return a
     return np.require(a, dtype=dtype, requirements=("C", "W", "A"))
 
 

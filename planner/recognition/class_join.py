@@ -89,7 +89,7 @@ def join_classes(
         if into[a] != a or into[b] != b:  # a class joins at most once, into a leader
             continue
         mine, theirs = members[a], members[b]
-        if np.intersect1d(family[mine], family[theirs]).size:
+        if not _disjoint(family[mine], family[theirs]):
             continue
         cost = len(mine) * int(points[theirs].sum()) + len(theirs) * int(points[mine].sum())
         if cost > left:
@@ -117,12 +117,25 @@ def _all_within(
     tau: float,
 ) -> bool:
     """Does every hypothesis of `mine` lie within `tau` of every one of `theirs`?
-    Measured one pass per two stable poses."""
-    a, b = np.repeat(mine, len(theirs)), np.tile(theirs, len(mine))
-    key = group[a] * len(rings) + group[b]
-    for k in np.unique(key):
-        sel = np.flatnonzero(key == k)
-        ga, gb = int(group[a[sel[0]]]), int(group[b[sel[0]]])
-        if not pairs_within(rings[ga], local[a[sel]], rings[gb], local[b[sel]], tau).all():
-            return False
+    Measured one pass per two stable poses (most classes hold one hypothesis, or
+    hypotheses of one stable pose: one pass)."""
+    mine_groups, their_groups = group[mine], group[theirs]
+    for ga in _distinct(mine_groups):
+        ia = local[mine[mine_groups == ga]] if len(mine) > 1 else local[mine]
+        for gb in _distinct(their_groups):
+            ib = local[theirs[their_groups == gb]] if len(theirs) > 1 else local[theirs]
+            a, b = np.repeat(ia, len(ib)), np.tile(ib, len(ia))
+            if not pairs_within(rings[ga], a, rings[gb], b, tau).all():
+                return False
     return True
+
+
+def _distinct(values: np.ndarray) -> list[int]:
+    """The distinct values, ascending (one without a sort when all are equal)."""
+    first = int(values[0])
+    return [first] if (values == first).all() else np.unique(values).tolist()
+
+
+def _disjoint(a: np.ndarray, b: np.ndarray) -> bool:
+    """No value in both (few values: sets, not sorts)."""
+    return set(a.tolist()).isdisjoint(b.tolist())
