@@ -24,6 +24,7 @@ from planner.geometry import (
     ANGLE_SLACK,
     LENGTH_SLACK,
     SHARE_SLACK,
+    rotate,
     rotation_matrices,
     wrap_angle,
 )
@@ -141,7 +142,7 @@ def inside_workspace(
     """(N,) does the posed `outline` (model frame, (V, 2)) lie inside the safe
     circle, within ``eps_t/2 + slack``, for each pose (`theta` (N,), `t` (N, 2))?"""
     Rs = rotation_matrices(theta)
-    verts = np.einsum("nij,vj->nvi", Rs, outline) + t[:, None, :]
+    verts = rotate(Rs, outline) + t[:, None, :]
     reach = np.hypot(*(verts - np.asarray(workspace.center)).transpose(2, 0, 1)).max(1)
     return reach <= workspace.radius + eps_t / 2 + slack
 
