@@ -16,8 +16,10 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
+from planner.compiled import c_array
 from planner.errors import PlannerError
 
 __all__ = [
@@ -233,17 +235,35 @@ def sorted_count(sorted_rows: np.ndarray, rows: np.ndarray, x: np.ndarray, side:
     [3, 2]
     """
     n = sorted_rows.shape[1]
-    lo = np.zeros(len(x), dtype=np.int64)
-    hi = np.full(len(x), n, dtype=np.int64)
-    flat = sorted_rows.reshape(-1)
-    base = np.asarray(rows) * n
-    for _ in range(max(1, n.bit_length())):
-        mid = (lo + hi) >> 1
-        value = flat[base + np.minimum(mid, n - 1)]
-        right = ((value <= x) if side == "right" else (value < x)) & (mid < hi)
-        lo = np.where(right, mid + 1, lo)
-        hi = np.where(right, hi, mid)
-    return lo
+    out = np.empty(len(x), dtype=np.int64)
+    _halving_counts(
+        c_array(sorted_rows.reshape(-1), dtype=np.float64),
+        c_array(rows, dtype=np.int64),
+        c_array(x, dtype=np.float64),
+        n,
+        max(1, n.bit_length()),
+        side == "right",
+        out,
+    )
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _halving_counts(flat, rows, x, n, steps, right, out):  # type: ignore[no-untyped-def]
+    """:func:`sorted_count` one query at a time, `steps` halvings each (the same
+    steps as an array pass would take for all, so the same counts whatever the
+    rows hold)."""
+    for e in range(x.shape[0]):
+        lo, hi, base = 0, n, rows[e] * n
+        for _ in range(steps):
+            mid = (lo + hi) >> 1
+            value = flat[base + min(mid, n - 1)]
+            below = value <= x[e] if right else value < x[e]
+            if below and mid < hi:
+                lo = mid + 1
+            else:
+                hi = mid
+        out[e] = lo
 
 
 def compact(chosen: np.ndarray) -> np.ndarray:

@@ -25,6 +25,7 @@ from planner.planning.bitsets import (
     close_ends,
     pack_bits,
     popcount,
+    sorted_count,
     to_int,
     transpose_bits,
     unpack_bits,
@@ -748,6 +749,21 @@ def test_transpose_bits_and_weighted_count(lead, rows, cols, seed):
     np.testing.assert_array_equal(popcount(words), mask.sum(-1))
     weight = rng.random(cols)
     np.testing.assert_allclose(weighted_count(words, weight), mask @ weight, rtol=1e-12)
+
+
+@settings(max_examples=60, deadline=None)
+@given(
+    st.integers(1, 5), st.integers(1, 70), st.integers(0, 2**31), st.sampled_from(["left", "right"])
+)
+def test_sorted_count_is_searchsorted_on_each_row(n_rows, n, seed, side):
+    rng = np.random.default_rng(seed)
+    # coarse values (many ties) and +inf padding, as the interval lists hold
+    ends = np.sort(rng.integers(0, 12, (n_rows, n)) / 2, axis=1)
+    ends[:, n - int(rng.integers(0, n + 1)) :] = np.inf
+    rows = rng.integers(0, n_rows, 40)
+    x = rng.integers(-1, 14, 40) / 2
+    want = [np.searchsorted(ends[r], v, side=side) for r, v in zip(rows, x, strict=True)]
+    assert sorted_count(ends, rows, x, side).tolist() == want
 
 
 @settings(max_examples=40, deadline=None)
