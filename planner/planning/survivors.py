@@ -82,13 +82,12 @@ def pin_families(
         same = (outcomes.face[:, hs, None] == outcomes.face[:, None, hs]) & (
             pins[:, :, None] & pins[:, None, :]
         )  # (C, S, S): the sample pair is pinned apart on that path
-        for b, h in enumerate(hs):
-            k = int(posed.cls[h])
-            word, bit = k // 64, np.uint64(1) << np.uint64(k % 64)
-            classes = posed.cls[hs]
-            apart = same[:, :, b]
-            apart[:, b] = False
-            bits[:, classes, word] &= np.where(apart, ~bit, ~np.uint64(0))
+        same[:, np.arange(len(hs)), np.arange(len(hs))] = False
+        # on path c, sample a's class no longer survives with sample b's class
+        c, a, b = np.nonzero(same)
+        k = posed.cls[hs]
+        bit = np.left_shift(np.uint64(1), (k[b] % 64).astype(np.uint64))
+        np.bitwise_and.at(bits, (c, k[a], k[b] // 64), ~bit)
     return bits
 
 
