@@ -18,6 +18,7 @@ of its own:
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -29,6 +30,9 @@ from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import free_space_check, inside_workspace, model_check
 from planner.recognition.poses import (
     PoseFit,
+    RowShapes,
+    SampleBounds,
+    SlideSamples,
     fit_bounds,
     fit_poses_of_groups,
     rotation_gate,
@@ -160,68 +164,36 @@ def evaluate_groups(
     indices: Sequence[int] | None = None,
 ) -> list[PoseSamples]:
     """:func:`evaluate` of every group (its `rows` each, numbered by `indices`,
-    default their places): the pose fits of all groups in one pass (each row's fit
-    is its own), the steps that depend on a group's outline group by group."""
+    default their places). The steps that treat each row on its own (the fit, its
+    bounds, the slide samples, the model check, the weights) run over the rows of
+    all groups in one pass, face numbers moved into one table; the steps that
+    depend on a group's outline or measure a group's rows together (the consistent
+    sets, the free space) run group by group. Each row gets the numbers a pass
+    over its group alone gives."""
     indices = range(len(groups)) if indices is None else indices
     out = [_no_samples(g) for g in indices]
     if all(o.contact is None for o in observations):
         return out
     contacts = _Contacts.of(observations)
     P, U, psi = contacts.points, contacts.normals, contacts.psi
-    phi = bounds.normal_error
+    eps_d, phi = bounds.position_error, bounds.normal_error
+    slack = LENGTH_SLACK * length_scale * 10
     gated = [_gated(r, g.stable.all_faces, psi, phi) for g, r in zip(groups, rows, strict=True)]
     live = [k for k, x in enumerate(gated) if x is not None]
     if not live:
         return out
-    fits = fit_poses_of_groups(
-        [groups[k].stable for k in live],
-        P,
-        U,
-        [gated[k].face for k in live],  # type: ignore[union-attr]
-        [gated[k].assigned for k in live],  # type: ignore[union-attr]
-        bounds.position_error,
-        phi,
-        length_scale,
+    stack = _Stack.of([groups[k] for k in live], [gated[k] for k in live])  # type: ignore[misc]
+    stables = [g.stable for g in stack.groups]
+    pose = fit_poses_of_groups(
+        stables, P, U, stack.local_faces, stack.assigned_parts, eps_d, phi, length_scale
     )
-    for k, pose in zip(live, fits, strict=True):
-        out[k] = _checked(
-            indices[k],
-            groups[k],
-            gated[k],  # type: ignore[arg-type]
-            pose,
-            observations,
-            contacts,
-            bounds,
-            workspace,
-            config,
-            length_scale,
-        )
-    return out
-
-
-def _checked(
-    group_index: int,
-    group: Group,
-    gated: _Gated,
-    pose: PoseFit,
-    observations: list[Observation],
-    contacts: _Contacts,
-    bounds: SensorBounds,
-    workspace: Workspace,
-    config: RecognitionConfig,
-    length_scale: float,
-) -> PoseSamples:
-    """Steps 2-7 on one group's fitted rows."""
-    eps_d, phi = bounds.position_error, bounds.normal_error
-    stable = group.stable
-    faces = stable.all_faces
-    slack = LENGTH_SLACK * length_scale * 10
-    P, U, psi = contacts.points, contacts.normals, contacts.psi
-    keep, face, assigned = gated.keep, gated.face, gated.assigned
-    fit_bound = fit_bounds(pose, stable, assigned, eps_d, phi, config, slack)
+    face, assigned = stack.face, stack.assigned
+    fit_bound = fit_bounds(
+        pose, RowShapes.of(stables, stack.counts), assigned, eps_d, phi, config, slack
+    )
     samples = slide_samples(
         pose,
-        faces,
+        stack.faces,
         face,
         assigned,
         fit_bound.margin,
@@ -229,37 +201,149 @@ def _checked(
         config.max_family_samples,
         length_scale,
     )
-    bound = sample_bounds(
-        pose, fit_bound, samples, stable, P, U, face, assigned, eps_d, phi, config, slack
+    parts = stack.parts(samples.src)
+    bound = _joined_bounds(
+        [
+            sample_bounds(
+                pose.part(rs),
+                fit_bound.part(rs),
+                samples.part(rs, ss),
+                stables[j],
+                P,
+                U,
+                stack.local_faces[j],
+                stack.assigned_parts[j],
+                eps_d,
+                phi,
+                config,
+                slack,
+            )
+            for j, (rs, ss) in enumerate(parts)
+        ]
     )
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
     f_src, a_src = face[src], assigned[src]
-
     ok = bound.feasible & model_check(
-        faces, f_src, a_src, P, psi, theta, t, eps_t, bound.d_theta, eps_d, phi, slack
+        stack.faces, f_src, a_src, P, psi, theta, t, eps_t, bound.d_theta, eps_d, phi, slack
     )
-    if config.require_inside_workspace:
-        ok &= inside_workspace(stable.outline, theta, t, eps_t, workspace, slack)
-    if config.prior is not None:
-        ok &= within_prior(config.prior, stable, theta, t, bound, slack)
-    ok = free_space_check(group, observations, a_src, theta, t, eps_t, ok, eps_d, slack)
-
-    fitness = residual_fitness(
-        group, observations, pose, samples, P, U, face, assigned, ok, eps_d, phi, config, slack
-    )
+    fitness = np.ones(len(src))
+    for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):
+        ok[ss], fitness[ss] = _outline_checks(
+            group, observations, pose.part(rs), samples.part(rs, ss), _bounds_part(bound, ss),
+            ok[ss], contacts, stack.local_faces[j], stack.assigned_parts[j],
+            workspace, config, eps_d, phi, slack,
+        )  # fmt: skip
+    prior = np.array([g.prior for g in stack.groups])[stack.group[src]]
     weight = weights(
-        group.prior, pose, samples, faces, f_src, a_src, contacts.directions, fitness, config
+        prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config
+    )
+    keep = stack.keep[src]
+    for j, (_, ss) in enumerate(parts):
+        sel = np.flatnonzero(ok[ss] & (weight[ss] > 0)) + ss.start
+        out[live[j]] = PoseSamples(
+            indices[live[j]], keep[sel], theta[sel], t[sel], bound.d_translation[sel],
+            bound.d_theta[sel], eps_t[sel], samples.cell[src[sel]], weight[sel],
+        )  # fmt: skip
+    return out
+
+
+@dataclass(frozen=True, eq=False)
+class _Stack:
+    """The gated rows of several groups stacked in group order (K rows): each
+    group's faces in one table (`faces`, the group's face numbers moved past the
+    faces of the groups before it: `face` (K, s)), `assigned` (K, s), `keep` (K,)
+    each row's index among its group's rows, `group` (K,) its place in `groups`;
+    per group its rows' `counts`, its own face numbers and assignments."""
+
+    groups: list[Group]
+    counts: list[int]
+    local_faces: list[np.ndarray]
+    assigned_parts: list[np.ndarray]
+    faces: Faces
+    face: np.ndarray
+    assigned: np.ndarray
+    keep: np.ndarray
+    group: np.ndarray
+
+    @classmethod
+    def of(cls, groups: list[Group], gated: list[_Gated]) -> _Stack:
+        tables = [g.stable.all_faces for g in groups]
+        counts = [len(x.face) for x in gated]
+        moved = np.cumsum([0] + [len(f) for f in tables[:-1]])
+        faces = Faces(
+            *(
+                np.concatenate([getattr(f, n.name) for f in tables])
+                for n in dataclasses.fields(Faces)
+            )
+        )
+        return cls(
+            groups,
+            counts,
+            [x.face for x in gated],
+            [x.assigned for x in gated],
+            faces,
+            np.concatenate([x.face + m for x, m in zip(gated, moved, strict=True)]),
+            np.concatenate([x.assigned for x in gated]),
+            np.concatenate([x.keep for x in gated]),
+            np.repeat(np.arange(len(groups)), counts),
+        )
+
+    def parts(self, src: np.ndarray) -> list[tuple[slice, slice]]:
+        """Each group's rows and the samples they drew (`src` (N,) the row of each
+        sample, ascending), both in group order."""
+        row_ends = np.cumsum(self.counts)
+        sample_ends = np.searchsorted(src, row_ends)
+        return [
+            (slice(r1 - n, r1), slice(s0, s1))
+            for n, r1, s0, s1 in zip(
+                self.counts, row_ends, np.r_[0, sample_ends[:-1]], sample_ends, strict=True
+            )
+        ]
+
+
+def _bounds_part(bound: SampleBounds, samples: slice) -> SampleBounds:
+    return SampleBounds(
+        *(getattr(bound, f.name)[samples] for f in dataclasses.fields(SampleBounds))
     )
 
-    sel = np.flatnonzero(ok & (weight > 0))
-    return PoseSamples(
-        group=group_index,
-        row=keep[src[sel]],
-        theta=theta[sel],
-        t=t[sel],
-        d_translation=bound.d_translation[sel],
-        d_theta=bound.d_theta[sel],
-        eps_t=eps_t[sel],
-        cell=samples.cell[src[sel]],
-        weight=weight[sel],
+
+def _joined_bounds(parts: list[SampleBounds]) -> SampleBounds:
+    return SampleBounds(
+        *(
+            np.concatenate([getattr(p, f.name) for p in parts])
+            for f in dataclasses.fields(SampleBounds)
+        )
     )
+
+
+def _outline_checks(
+    group: Group,
+    observations: list[Observation],
+    pose: PoseFit,
+    samples: SlideSamples,
+    bound: SampleBounds,
+    ok: np.ndarray,
+    contacts: _Contacts,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    workspace: Workspace,
+    config: RecognitionConfig,
+    eps_d: float,
+    phi: float,
+    slack: float,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Steps 5-7 that need one group's outline (its rows' own face numbers `face`,
+    `assigned` (K, s)): the safe circle and prior, the free space, and the residual
+    fitness; `ok` (N,) and the fitness of its samples."""
+    stable = group.stable
+    src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
+    if config.require_inside_workspace:
+        ok = ok & inside_workspace(stable.outline, theta, t, eps_t, workspace, slack)
+    if config.prior is not None:
+        ok = ok & within_prior(config.prior, stable, theta, t, bound, slack)
+    ok = free_space_check(group, observations, assigned[src], theta, t, eps_t, ok, eps_d, slack)
+    fitness = residual_fitness(
+        group, observations, pose, samples, contacts.points, contacts.normals, face, assigned,
+        ok, eps_d, phi, config, slack,
+    )  # fmt: skip
+    return ok, fitness

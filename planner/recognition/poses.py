@@ -82,6 +82,13 @@ class PoseFit:
     rho: np.ndarray
     model_points: np.ndarray
 
+    def part(self, rows: slice) -> PoseFit:
+        """The fit of some rows (views, not copies)."""
+        fit = FitBatch(*(getattr(self.fit, f.name)[rows] for f in dataclasses.fields(FitBatch)))
+        return PoseFit(
+            fit, self.sigma_d, self.slide_axis[rows], self.rho[rows], self.model_points[rows]
+        )
+
 
 def fit_poses(
     stable: StablePose,
@@ -98,7 +105,7 @@ def fit_poses(
     slide coordinate 0."""
     return fit_poses_of_groups(
         [stable], points, normals, [face], [assigned], eps_d, phi, length_scale
-    )[0]
+    )
 
 
 def fit_poses_of_groups(
@@ -110,10 +117,11 @@ def fit_poses_of_groups(
     eps_d: float,
     phi: float,
     length_scale: float,
-) -> list[PoseFit]:
+) -> PoseFit:
     """:func:`fit_poses` of the rows of several groups (`faces`, `assigned` (K_g, s)
-    per stable pose) in one pass: every row's fit is its own, so each group gets the
-    numbers a pass over its rows alone gives, without a pass's fixed cost per group."""
+    per stable pose), stacked in their order, in one pass: every row's fit is its
+    own, so each group's rows get the numbers a pass over them alone gives, without
+    a pass's fixed cost per group."""
     sigma_d, sigma_phi = noise_scales(eps_d, phi, length_scale)
     counts = [len(f) for f in faces]
     normal = np.concatenate([s.all_faces.normal[f] for s, f in zip(stables, faces, strict=True)])
@@ -129,38 +137,51 @@ def fit_poses_of_groups(
     rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
     e = normal[np.arange(len(used)), np.argmax(used, 1)] @ _TURN.T
     m0 = rotate(R.transpose(0, 2, 1), points[None] - fit.t[:, None, :])  # contacts' model points
-    ends = np.cumsum(counts)[:-1]
-    fits = [
-        FitBatch(*parts)
-        for parts in zip(
-            *(np.split(getattr(fit, f.name), ends) for f in dataclasses.fields(FitBatch)),
-            strict=True,
+    return PoseFit(fit=fit, sigma_d=sigma_d, slide_axis=e, rho=rho, model_points=m0)
+
+
+@dataclass(frozen=True, eq=False)
+class RowShapes:
+    """What the fit bounds need of each row's stable pose (K rows): the
+    `centroid_radius` (K,) and the outline's vertices `extent` (K, P, 2), padded
+    with copies of a vertex of the row's own outline (a largest displacement over
+    them is the same)."""
+
+    centroid_radius: np.ndarray
+    extent: np.ndarray
+
+    @classmethod
+    def of(cls, stables: Sequence[StablePose], counts: Sequence[int]) -> RowShapes:
+        """`counts[g]` rows of stable pose `stables[g]`, stacked in order."""
+        most = max(len(p.extent) for p in stables)
+        padded = np.array(
+            [np.vstack([p.extent, p.extent[-1:].repeat(most - len(p.extent), 0)]) for p in stables]
         )
-    ]
-    return [
-        PoseFit(fit=f, sigma_d=sigma_d, slide_axis=a, rho=r, model_points=m)
-        for f, a, r, m in zip(
-            fits, np.split(e, ends), np.split(rho, ends), np.split(m0, ends), strict=True
-        )
-    ]
+        which = np.repeat(np.arange(len(stables)), counts)
+        radius = np.array([p.centroid_radius for p in stables], dtype=float)
+        return cls(radius[which], padded[which])
 
 
 @dataclass(frozen=True, eq=False)
 class FitBounds:
     """Error bounds of each row's fit at slide coordinate 0 (K rows): `eps_t` the
     error-disk diameter (length), `d_theta` the rotation bound (radians), `margin`
-    (K, s) how far each contact may lie beyond its face's ends, and `second` the
-    second-order allowance of the linearization (0 in `thesis` mode)."""
+    (K, s) how far each contact may lie beyond its face's ends, and `second` (K,)
+    the second-order allowance of the linearization (0 in `thesis` mode)."""
 
     eps_t: np.ndarray
     d_theta: np.ndarray
     margin: np.ndarray
-    second: float
+    second: np.ndarray
+
+    def part(self, rows: slice) -> FitBounds:
+        """The bounds of some rows."""
+        return FitBounds(self.eps_t[rows], self.d_theta[rows], self.margin[rows], self.second[rows])
 
 
 def fit_bounds(
     pose: PoseFit,
-    stable: StablePose,
+    shapes: RowShapes | StablePose,
     assigned: np.ndarray,
     eps_d: float,
     phi: float,
@@ -170,23 +191,25 @@ def fit_bounds(
     """Error bounds of the fits (DESIGN §4.4): `linearized`, the worst case of the
     first-order sensitivities to errors within (eps_d, phi), plus a second-order
     allowance; `thesis`, a fixed error disk of `thesis_fraction` of the effective
-    diameter."""
+    diameter. `shapes`: each row's stable pose (:class:`RowShapes`), or one for all."""
     fit = pose.fit
-    r_c = stable.centroid_radius
+    if isinstance(shapes, StablePose):
+        shapes = RowShapes.of([shapes], [len(fit.theta)])
+    r_c = shapes.centroid_radius
     if config.bound_mode != "thesis":
         _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
         # second-order allowance for the linearization: rotations by up to phi
         second = (phi**2) * r_c + phi * eps_d
         d_th = d_th * (1 + phi) + phi**2
         # first-order worst case at every outline vertex (at s = 0: for the sample spacing)
-        moved = point_bounds(fit, stable.extent, assigned, eps_d, phi)
+        moved = point_bounds(fit, shapes.extent, assigned, eps_d, phi)
         eps_t0 = 2 * (moved.max(axis=1) * (1 + phi) + second)
         # a contact's own model point moves by at most this: its slide margin
         at_contact = point_bounds(fit, pose.model_points, assigned, eps_d, phi)
-        margin = eps_d + at_contact * (1 + phi) + second + slack
+        margin = eps_d + at_contact * (1 + phi) + second[:, None] + slack
     else:
-        second = 0.0
-        eps_t0 = np.full(len(fit.theta), config.thesis_fraction * 2 * r_c)
+        second = np.zeros(len(fit.theta))
+        eps_t0 = config.thesis_fraction * 2 * r_c
         d_th = eps_t0 / (2 * r_c)
         margin = np.broadcast_to((eps_d + eps_t0 / 2 + slack)[:, None], assigned.shape)
     return FitBounds(eps_t=eps_t0, d_theta=d_th, margin=margin, second=second)
@@ -207,6 +230,19 @@ class SlideSamples:
     family: np.ndarray
     cell: np.ndarray
     span_scale: np.ndarray
+
+    def part(self, rows: slice, samples: slice) -> SlideSamples:
+        """The samples `samples` of the rows `rows` (which drew them), rows
+        numbered from the first of `rows`."""
+        return SlideSamples(
+            self.src[samples] - rows.start,
+            self.s[samples],
+            self.theta[samples],
+            self.t[samples],
+            self.family[rows],
+            self.cell[rows],
+            self.span_scale[rows],
+        )
 
 
 def slide_samples(
@@ -313,7 +349,7 @@ def sample_bounds(
     if config.bound_mode != "thesis":
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
-        moved = moved * (1 + phi) + second
+        moved = moved * (1 + phi) + second[src][:, None]
         d_theta = d_th[src]
         # determined poses: the set of poses consistent with every contact is often far
         # smaller than the estimator's worst case (errors do not add up); keep the smaller
