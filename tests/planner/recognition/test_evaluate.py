@@ -370,6 +370,20 @@ def _twins(prior_a: float, prior_b: float):
     ]
 
 
+def _grown_tree(models, truths, seed, touches):
+    """The tree's groups and level after `touches` random hits on a world drawn
+    from `truths`, and the observations."""
+    rng = np.random.default_rng(seed)
+    world = random_world(truths, WORKSPACE, rng)
+    groups = make_groups(models)
+    level = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in groups))
+    obs = []
+    for _ in range(touches):
+        obs.append(world.execute(world.hitting_path(rng), BOUNDS, rng)[0])
+        level = extend(level, groups, [o.contact for o in obs], BOUNDS, CONFIG)
+    return groups, level, obs
+
+
 @pytest.mark.parametrize(("prior_a", "prior_b"), [(3.0, 1.0), (1.0, 1.0), (0.2, 0.7)])
 @settings(max_examples=10, derandomize=True, deadline=None)
 @given(seed=st.integers(0, 2**32 - 1), touches=st.integers(1, 3))
@@ -377,14 +391,7 @@ def test_weights_follow_the_prior_ratio_for_otherwise_identical_interpretations(
     prior_a, prior_b, seed, touches
 ):
     models = _twins(prior_a, prior_b)
-    rng = np.random.default_rng(seed)
-    world = random_world(models[:1], WORKSPACE, rng)
-    groups = make_groups(models)
-    level = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in groups))
-    obs = []
-    for _ in range(touches):
-        obs.append(world.execute(world.hitting_path(rng), BOUNDS, rng)[0])
-        level = extend(level, groups, [o.contact for o in obs], BOUNDS, CONFIG)
+    groups, level, obs = _grown_tree(models, models[:1], seed, touches)
     a, b = (
         evaluate(g, groups[g], level.rows[g], obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
         for g in range(2)
@@ -508,17 +515,11 @@ def test_contacts_on_faces_is_the_distance_to_each_posed_segment(seed, contacts,
     set_name=st.sampled_from(SET_NAMES), seed=st.integers(0, 2**32 - 1), touches=st.integers(1, 4)
 )
 def test_groups_evaluated_together_are_each_evaluated_alone_bit_for_bit(set_name, seed, touches):
-    """The fits of every group's rows share one pass: each group still gets the
-    numbers a pass over its rows alone gives (the same bits, so the same plans)."""
+    """The row-wise steps of every group's rows share one pass: each group still
+    gets the numbers a pass over its rows alone gives (the same bits, so the same
+    plans)."""
     models = object_set(set_name)
-    rng = np.random.default_rng(seed)
-    world = random_world(models, WORKSPACE, rng)
-    groups = make_groups(models)
-    level = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in groups))
-    obs = []
-    for _ in range(touches):
-        obs.append(world.execute(world.hitting_path(rng), BOUNDS, rng)[0])
-        level = extend(level, groups, [o.contact for o in obs], BOUNDS, CONFIG)
+    groups, level, obs = _grown_tree(models, models, seed, touches)
     together = evaluate_groups(groups, level.rows, obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
     assert sum(len(c.weight) for c in together) > 0  # the true interpretation at least
     for g, both in enumerate(together):
