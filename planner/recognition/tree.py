@@ -69,8 +69,9 @@ class Group:
         return keys
 
 
-#: Vertices of shrunk outlines the process keeps.
-SHRUNK_COORDINATES = 1_000_000
+#: Vertices of shrunk outlines the process keeps (a few megabytes with their
+#: prepared indexes; a part shrunk at every tolerance step holds tens of thousands).
+SHRUNK_COORDINATES = 250_000
 
 
 @dataclass(frozen=True, eq=False)
