@@ -212,8 +212,9 @@ class Step:
 
     @property
     def distinguishing(self) -> bool:
-        """True when one equivalence class was left after this touch (a DM)."""
-        return self.update.status == "localized"
+        """True when one equivalence class was left after this touch (a DM),
+        whether or not its bound is yet within the session's accuracy."""
+        return self.update.classes == 1
 
 
 @dataclass(frozen=True)

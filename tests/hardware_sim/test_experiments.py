@@ -14,6 +14,7 @@ from hardware_sim.client import (
     Advice,
     Estimate,
     InProcessService,
+    Step,
     Update,
     outline_distance,
     run_recognition,
@@ -211,3 +212,21 @@ def test_thesis_in_its_own_setting_takes_its_window_where_nothing_is_informative
     assert any("thesis' best window, though not informative" in n for n in notes)
     assert rec.status == "localized"
     assert run_trial(spec, "thesis", 0).success
+
+
+@pytest.mark.parametrize(
+    ("update", "dm"),
+    [
+        (Update("localized", 2, 1), True),
+        (Update("ambiguous", 3, 1), True),  # one class, its bound short of the accuracy
+        (Update("ambiguous", 5, 2), False),
+        (Update("inconsistent", 0, 0), False),
+    ],
+)
+def test_a_distinguishing_touch_leaves_one_class_whatever_the_accuracy(update, dm):
+    """P(DM) is the probability of one class left (DESIGN §4.7): the calibration
+    must count a touch that leaves one class whose bound is not yet within the
+    session's accuracy as distinguishing, or it judges the forecast against
+    `localized` instead."""
+    step = Step(advice=None, observation=None, update=update, distance=0.0, time=0.0)
+    assert step.distinguishing is dm
