@@ -17,13 +17,12 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 
 from __future__ import annotations
 
-import hashlib
 from dataclasses import dataclass
 
 import numpy as np
 
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
-from planner.memo import SharedCache
+from planner.memo import SharedCache, array_key
 from planner.types import Contact, Faces, StablePose
 
 __all__ = [
@@ -88,10 +87,8 @@ def shared_tables(faces: Faces) -> ConstraintTables:
     parts (a robot cell's library) build each stable pose's tables once, not at
     every session's second touch. Keyed by the faces' numbers, least recently used
     dropped past :data:`SHARED_CELLS`; the arrays are read-only."""
-    digest = hashlib.blake2b(digest_size=16)
-    for name in ("start", "end", "normal", "offset"):
-        digest.update(np.ascontiguousarray(getattr(faces, name), dtype=float).tobytes())
-    return _shared.get(digest.digest(), lambda: _read_only(build_tables(faces)))
+    key = array_key(getattr(faces, name) for name in ("start", "end", "normal", "offset"))
+    return _shared.get(key, lambda: _read_only(build_tables(faces)))
 
 
 def _read_only(tables: ConstraintTables) -> ConstraintTables:

@@ -1,8 +1,9 @@
 """Interpretations -> posed, weighted hypotheses (DESIGN §4.4-4.7).
 
-:func:`evaluate` takes the surviving rows of one group of the interpretation tree
-(:mod:`planner.recognition.tree`) through the steps of the DESIGN, each a function
-of its own:
+:func:`evaluate_groups` takes the surviving rows of every group of the
+interpretation tree (:mod:`planner.recognition.tree`) through the steps of the
+DESIGN, each a function of its own; steps 1-4, 5's model check and 7 run over the
+rows of all groups at once, the rest group by group (:func:`evaluate`: one group):
 
 1. rotation gate and pose fit (§4.4, :mod:`planner.recognition.poses`);
 2. error bounds of the fit (§4.4);
@@ -229,7 +230,7 @@ def evaluate_groups(
     fitness = np.ones(len(src))
     for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):
         ok[ss], fitness[ss] = _outline_checks(
-            group, observations, pose.part(rs), samples.part(rs, ss), _bounds_part(bound, ss),
+            group, observations, pose.part(rs), samples.part(rs, ss), bound.part(ss),
             ok[ss], contacts, stack.local_faces[j], stack.assigned_parts[j],
             workspace, config, eps_d, phi, slack,
         )  # fmt: skip
@@ -299,12 +300,6 @@ class _Stack:
                 self.counts, row_ends, np.r_[0, sample_ends[:-1]], sample_ends, strict=True
             )
         ]
-
-
-def _bounds_part(bound: SampleBounds, samples: slice) -> SampleBounds:
-    return SampleBounds(
-        *(getattr(bound, f.name)[samples] for f in dataclasses.fields(SampleBounds))
-    )
 
 
 def _joined_bounds(parts: list[SampleBounds]) -> SampleBounds:

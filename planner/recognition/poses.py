@@ -38,6 +38,7 @@ from planner.types import Faces, StablePose
 __all__ = [
     "FitBounds",
     "PoseFit",
+    "RowShapes",
     "SampleBounds",
     "SlideSamples",
     "determined_rows",
@@ -181,7 +182,7 @@ class FitBounds:
 
 def fit_bounds(
     pose: PoseFit,
-    shapes: RowShapes | StablePose,
+    shapes: RowShapes,
     assigned: np.ndarray,
     eps_d: float,
     phi: float,
@@ -191,10 +192,8 @@ def fit_bounds(
     """Error bounds of the fits (DESIGN §4.4): `linearized`, the worst case of the
     first-order sensitivities to errors within (eps_d, phi), plus a second-order
     allowance; `thesis`, a fixed error disk of `thesis_fraction` of the effective
-    diameter. `shapes`: each row's stable pose (:class:`RowShapes`), or one for all."""
+    diameter. `shapes`: each row's stable pose."""
     fit = pose.fit
-    if isinstance(shapes, StablePose):
-        shapes = RowShapes.of([shapes], [len(fit.theta)])
     r_c = shapes.centroid_radius
     if config.bound_mode != "thesis":
         _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
@@ -319,6 +318,10 @@ class SampleBounds:
     d_theta: np.ndarray
     eps_t: np.ndarray
     feasible: np.ndarray
+
+    def part(self, samples: slice) -> SampleBounds:
+        """The bounds of some samples."""
+        return SampleBounds(*(getattr(self, f.name)[samples] for f in dataclasses.fields(self)))
 
 
 def sample_bounds(

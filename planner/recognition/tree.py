@@ -9,14 +9,13 @@ then the model check on the fitted pose (:mod:`planner.recognition.evaluate`).
 
 from __future__ import annotations
 
-import hashlib
 import threading
 from dataclasses import dataclass, field
 
 import numpy as np
 import shapely
 
-from planner.memo import SharedCache, cached_property
+from planner.memo import SharedCache, array_key, cached_property
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
     ConstraintTables,
@@ -60,13 +59,7 @@ class Group:
     @cached_property
     def _layer_keys(self) -> list[bytes]:
         """Each layer's outline and holes as a key (its numbers' digest)."""
-        keys = []
-        for layer in self.stable.layers:
-            digest = hashlib.blake2b(digest_size=16)
-            for ring in (layer.outline, *layer.holes):
-                digest.update(np.ascontiguousarray(ring, dtype=float).tobytes() + b"|")
-            keys.append(digest.digest())
-        return keys
+        return [array_key((layer.outline, *layer.holes)) for layer in self.stable.layers]
 
 
 #: Vertices of shrunk outlines the process keeps (a few megabytes with their

@@ -26,6 +26,7 @@ from planner.recognition.model_check import (
     model_check,
 )
 from planner.recognition.poses import (
+    RowShapes,
     fit_bounds,
     fit_poses,
     rotation_gate,
@@ -90,7 +91,7 @@ def _steps(stable, obs, faces, bounds, length_scale, config=CONFIG):
     eps_d, phi = bounds.position_error, bounds.normal_error
     slack = _slack(length_scale)
     pose = fit_poses(stable, P, U, face, assigned, eps_d, phi, length_scale)
-    fb = fit_bounds(pose, stable, assigned, eps_d, phi, config, slack)
+    fb = fit_bounds(pose, RowShapes.of([stable], [len(face)]), assigned, eps_d, phi, config, slack)
     samples = slide_samples(
         pose,
         stable.faces,
