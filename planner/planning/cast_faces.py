@@ -35,7 +35,9 @@ def segment_distance(
 
 @dataclass(frozen=True, eq=False)
 class CastFaces:
-    """Posed faces as separate x and y arrays (H, F), the tolerances (H,) and each
+    """Posed faces as separate x and y arrays (H, F), the tolerances (H,), the sine
+    of each pose's rotation bound (`turn_sin` (H,): a path meets a face only if
+    its direction and the face's nominal normal make ``d . n < turn_sin``) and each
     outline's bounding circle (`centre_x`, `centre_y`, `radius`, (H,))."""
 
     sx: np.ndarray
@@ -51,6 +53,7 @@ class CastFaces:
     geometric: np.ndarray
     vertex_tol: np.ndarray
     graze_sin: np.ndarray
+    turn_sin: np.ndarray
     centre_x: np.ndarray
     centre_y: np.ndarray
     radius: np.ndarray
@@ -77,6 +80,7 @@ class CastFaces:
             geometric=tol[0],
             vertex_tol=tol[1],
             graze_sin=tol[2],
+            turn_sin=np.sin(np.minimum(posed.rotation, np.pi / 2)),
             centre_x=centre[:, 0],
             centre_y=centre[:, 1],
             radius=radius,

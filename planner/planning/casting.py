@@ -20,11 +20,13 @@ from planner.planning.cast_faces import CastFaces, angle_cone
 from planner.planning.posed_set import PosedSet
 from planner.planning.uncertain_hits import (
     NearContact,
+    Stretch,
     close_passes,
+    near_after_slip,
     near_misses,
     shallow_hits,
     slip_past,
-    thin_stretch,
+    stretch_past_hits,
 )
 
 __all__ = ["cast_paths"]
@@ -93,14 +95,15 @@ class _Doubts:
     `vertex`: the contact lies in a vertex zone, `adj_x`, `adj_y` the normal of
     the face adjacent at the nearer end; `grazing`, `end_of_path` (the hit may
     lie past the path's end), `shallow` (the path cuts the outline no deeper than
-    `geometric`); `stretch` how far past the hit the path stays that shallow and
-    `long_stretch` whether that is over twice the contact's own play along the
-    path; `slack` how far along the path a face displaced by `geometric` moves the
+    `geometric`); `stretch` how far past the hit a contact may still come and on
+    which other faces (:class:`~planner.planning.uncertain_hits.Stretch`);
+    `slack` how far along the path a face displaced by `geometric` moves the
     contact, beyond `geometric` itself; `slip` whether the path may slip past
     the contact, and if it hits again further on (`slip_hit`) how far along
     (`slip_dist`) at what normal angle (`slip_angle`); `near_miss` and
     `close_pass` where a miss passes near an outline and a hit passes near a
-    vertex before its contact.
+    vertex before its contact; `after_slip` where a path that slips past its
+    contact passes near a face further on.
     """
 
     vertex: np.ndarray
@@ -109,8 +112,7 @@ class _Doubts:
     grazing: np.ndarray
     end_of_path: np.ndarray
     shallow: np.ndarray
-    stretch: np.ndarray
-    long_stretch: np.ndarray
+    stretch: Stretch
     slack: np.ndarray
     slip: np.ndarray
     slip_hit: np.ndarray
@@ -118,6 +120,7 @@ class _Doubts:
     slip_angle: np.ndarray
     near_miss: NearContact
     close_pass: NearContact
+    after_slip: NearContact
 
 
 @dataclass(frozen=True, eq=False)
@@ -146,7 +149,8 @@ def _outcome_chunk(
     :class:`planner.planning.outcomes.Outcomes`. Slot 0 is the nominal hit (or
     the miss), slot 1 the vertex a vertex hit may have touched or where a near
     miss or close pass may meet the outline, slot 2 where a slipping path hits
-    next, or a close pass that found slot 1 taken."""
+    next, or a close pass that found slot 1 taken, slot 3 where a slipping path
+    passes near a face further on."""
     hits = _first_hits(fc, origins, directions, lengths)
     doubt = _doubts(fc, origins, directions, lengths, hits)
     close = doubt.close_pass
@@ -159,12 +163,14 @@ def _outcome_chunk(
         np.where(in_slot1, close.y, doubt.near_miss.y),
         np.where(in_slot1, close.centre, doubt.near_miss.centre),
         np.where(in_slot1, close.spread, doubt.near_miss.spread),
+        np.where(in_slot1, close.slack, doubt.near_miss.slack),
     )
     along_pass, off_pass = _along_and_off(origins, hits, close.x, close.y)
     slots = (
         _nominal_slot(hits, doubt, along_pass),
         _vertex_or_near_slot(origins, hits, doubt, near),
         _slip_or_pass_slot(origins, hits, doubt, in_slot2, along_pass, off_pass),
+        _after_slip_slot(origins, hits, doubt.after_slip),
     )
     hit, nan = hits.hit, np.full(hits.hit.shape, np.nan)
     return {
@@ -180,7 +186,7 @@ def _outcome_chunk(
         "end_of_path": doubt.end_of_path,
         "shallow": doubt.shallow,
         "close_pass": close.flag,
-        "stretch": doubt.long_stretch,
+        "stretch": doubt.stretch.other_faces,
         **_stacked(slots),
         "heading": np.arctan2(directions[:, 1], directions[:, 0]),
     }
@@ -257,7 +263,7 @@ def _doubts(
     end_of_path = hit & (dist > length - along)
     facing_away = dx * adj_x + dy * adj_y > -graze_sin
     shallow = shallow_hits(fc, t, dist, hit, f, rows, dx, dy, cos_in, length)
-    stretch = thin_stretch(fc, origins, t, dist, hit, vertex, face_len, f, dx, dy)
+    stretch = stretch_past_hits(fc, origins, t, dist, hit, f, dx, dy, length)
     slip = (vertex & facing_away) | grazing | end_of_path | shallow
     slip_hit, slip_dist, slip_angle = slip_past(fc, t, slip, end_of_path, hits.px, hits.py, dx, dy)
     return _Doubts(
@@ -268,8 +274,6 @@ def _doubts(
         end_of_path=end_of_path,
         shallow=shallow,
         stretch=stretch,
-        # a contact may come anywhere along a long shallow stretch, on any face near it
-        long_stretch=stretch > 2 * along,
         slack=np.where(hit, along - geometric, 0.0),
         slip=slip,
         slip_hit=slip_hit,
@@ -277,6 +281,7 @@ def _doubts(
         slip_angle=slip_angle,
         near_miss=near_misses(fc, origins, directions, lengths, hit),
         close_pass=close_passes(fc, origins, hit, rows, hits.px, hits.py),
+        after_slip=near_after_slip(fc, origins, directions, lengths, slip, dist, hits.px, hits.py),
     )
 
 
@@ -292,20 +297,26 @@ def _nominal_slot(hits: _Hits, doubt: _Doubts, along_pass: np.ndarray) -> _Slot:
     """Slot 0: the first hit (or the miss), spread over what it may turn out to be."""
     hit, reached = hits.hit, hits.reached
     nan = np.full(hit.shape, np.nan)
-    angle0 = np.arctan2(hits.ny, hits.nx)
-    # slot 0 spans the stretch past the hit; a close pass with no slot left to hold
-    # it (a vertex hit that may slip) stretches slot 0 back to the pass instead
+    stretch = doubt.stretch
+    # past the hit a contact may still come on other faces near the path: slot 0
+    # spans that stretch and every normal there; a stretch still open at its last
+    # point may meet anything
+    other = stretch.other_faces
+    angle0 = np.arctan2(hits.ny, hits.nx) + np.where(other, (stretch.lo + stretch.hi) / 2, 0.0)
+    # a close pass with no slot left to hold it (a vertex hit that may slip)
+    # stretches slot 0 back to the pass instead
     crowded = doubt.close_pass.flag & doubt.vertex & doubt.slip
     lo = np.where(crowded, np.minimum(np.nan_to_num(along_pass), reached), reached)
-    hi = reached + np.where(doubt.long_stretch, doubt.stretch, 0.0)
+    hi = reached + np.where(other, stretch.length, 0.0)
     mid, half = (lo + hi) / 2 - reached, (hi - lo) / 2
+    spread = np.where(other, np.minimum((stretch.hi - stretch.lo) / 2, math.pi), 0.0)
     return _Slot(
         valid=np.ones_like(hit),
         hit=hit,
         x=hits.hit_x + mid * hits.dx,
         y=hits.hit_y + mid * hits.dy,
         angle=angle0,
-        spread=np.where(doubt.long_stretch | crowded, math.pi, 0.0),
+        spread=np.where(stretch.open | crowded, math.pi, spread),
         slack=doubt.slack + half,
         distance=np.where(hit, hits.dist + mid, nan),
         offset=np.zeros_like(angle0),
@@ -331,7 +342,7 @@ def _vertex_or_near_slot(
         y=np.where(vertex, hits.py, near.y),
         angle=np.where(vertex, v_centre, near.centre),
         spread=np.where(vertex, v_spread, near.spread),
-        slack=np.where(vertex, doubt.slack, 0.0),
+        slack=np.where(vertex, doubt.slack, near.slack),
         distance=np.where(vertex, hits.dist, along_near),
         offset=np.where(vertex, 0.0, off_near),
     )
@@ -362,6 +373,23 @@ def _slip_or_pass_slot(
         slack=zero,
         distance=np.where(in_slot2, along_pass, np.where(slip_hit, slip_dist, nan)),
         offset=np.where(in_slot2, off_pass, zero),
+    )
+
+
+def _after_slip_slot(origins: np.ndarray, hits: _Hits, near: NearContact) -> _Slot:
+    """Slot 3: where a path that may slip past its contact passes near a face
+    further on (a stretch of the path, with the cone of those faces' normals)."""
+    along, off = _along_and_off(origins, hits, near.x, near.y)
+    return _Slot(
+        valid=near.flag,
+        hit=near.flag,
+        x=near.x,
+        y=near.y,
+        angle=np.where(near.flag, near.centre, 0.0),
+        spread=np.where(near.flag, near.spread, 0.0),
+        slack=near.slack,
+        distance=np.where(near.flag, along, np.nan),
+        offset=np.where(near.flag, off, 0.0),
     )
 
 

@@ -35,8 +35,9 @@ if TYPE_CHECKING:
 
 __all__ = ["SLOTS", "Slots", "match_rows", "miss_bits", "slots_match"]
 
-#: Outcome slots per (path, hypothesis): nominal, vertex/near-miss alternative, slip-through.
-SLOTS = 3
+#: Outcome slots per (path, hypothesis): nominal, vertex/near-miss alternative,
+#: slip-through, and a face passed near after a slip.
+SLOTS = 4
 
 
 def miss_bits(outcomes: Outcomes, group: np.ndarray, n_groups: int) -> np.ndarray:

@@ -74,20 +74,23 @@ class Outcomes:
     far the sensor moves: the hit distance, or the path length on a miss).
     Uncertainty flags (C, H): `vertex` (hit within tolerance of a vertex),
     `grazing` (path nearly parallel to the face hit), `near_miss` (a miss that
-    passes within tolerance of the outline), `end_of_path` (hit within tolerance
-    of the path's end: it may be a miss), `shallow` (the path cuts so little of the
-    outline that the true one, within tolerance, may let it pass: it may be a
-    miss), `close_pass` (before its hit the path passes within the vertex zone of
-    another vertex: it may be met there first), `stretch` (past the hit the path
-    stays shallow for long, through a thin feature: the contact may come anywhere
-    along it, on any face; slot 0 then spans that stretch with any normal).
+    passes within the vertex zone of a face it may meet: slot 1 spans every such
+    stretch of it), `end_of_path` (hit within tolerance of the path's end: it may
+    be a miss), `shallow` (the path cuts so little of the outline that the
+    recognition, which lets a path run into an outline by its tolerances, may let
+    it pass: it may be a miss), `close_pass` (before its hit the path passes within
+    the vertex zone of another vertex: it may be met there first), `stretch` (past
+    the hit the path stays shallow enough for a contact and passes near other
+    faces, or stays so for long: slot 0 then spans that stretch with the normals of
+    those faces, or any normal).
 
-    Outcome slots (C, H, 3) list everything the outcome could turn out to be:
+    Outcome slots (C, H, 4) list everything the outcome could turn out to be:
     slot 0 the nominal outcome, slot 1 a hit near the nominal point (or near the
     closest approach of a near miss or of a close pass) whose normal may lie
     anywhere in the cone `slot_angle +- slot_spread` between the faces meeting at
     the vertex, slot 2 the path slipping past the contact (the next hit further on,
-    or a miss; a vertex hit's close pass takes it when it is free).
+    or a miss; a vertex hit's close pass takes it when it is free), slot 3 a
+    slipping path meeting a face it passes near further on.
     `slot_slack` widens the point tolerance of grazing hits, whose contact
     slides along the path by `tolerance / |cos(incidence)|`. `slot_distance`
     is how far along the path a slot's point lies (NaN for a miss) and

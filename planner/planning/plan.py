@@ -15,6 +15,7 @@ radians.
 from __future__ import annotations
 
 import dataclasses
+import math
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -57,6 +58,10 @@ FORECAST_SHARE = 0.25
 _WEAK = 0.05
 #: Smallest share of the expected error disk a refining path must remove.
 _REFINE_GAIN = 0.01
+
+#: A refining touch the outcome model expects to leave more than this share of
+#: the error disk is weak: the recognition's predictions are asked as well.
+_WEAK_REFINEMENT = 0.5
 
 
 def plan_session(
@@ -334,9 +339,21 @@ def _one_class(
     paths, note = _refining(
         found, hypotheses, by_name, contacts, sensor, _no_ranking(found), config
     )
-    if not paths and session is not None:
-        paths, note = _refining_by_recognition(found, session, config, budget)
+    current = max(h.error_bound.eps_t for h in hypotheses)
+    weak = not paths or (paths[0].expected_eps_t or current) > _WEAK_REFINEMENT * current
+    if weak and session is not None:
+        # the outcome model credits few contacts where other faces lie near the one
+        # hit: the recognition's own predictions may find a better touch
+        judged, judged_note = _refining_by_recognition(found, session, config, budget)
+        if judged and (not paths or _eps_t(judged[0]) < _eps_t(paths[0])):
+            paths, note = judged, judged_note
+        elif not paths:
+            note = judged_note
     return paths, note or "one class left; no path shrinks its bound further"
+
+
+def _eps_t(path: PlannedPath) -> float:
+    return math.inf if path.expected_eps_t is None else path.expected_eps_t
 
 
 def _refining_by_recognition(

@@ -16,30 +16,34 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from planner.compiled import c_array, outward, segment_gap
+from planner.compiled import c_array, segment_gap
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
 
 __all__ = [
     "NearContact",
+    "Stretch",
     "close_passes",
+    "near_after_slip",
     "near_misses",
     "shallow_hits",
     "slip_past",
-    "thin_stretch",
+    "stretch_past_hits",
 ]
 
 
 @dataclass(frozen=True, eq=False)
 class NearContact:
     """Where the true outline may be met instead of the nominal outcome, each
-    (c, H): `flag`, and, meaningful where it is set, the point (`x`, `y`) and
-    the centre and half-width (radians) of the normals there."""
+    (c, H): `flag`, and, meaningful where it is set, the point (`x`, `y`), the
+    centre and half-width (radians) of the normals there, and the `slack` along
+    the path (the point is the middle of a stretch of it that long each way)."""
 
     flag: np.ndarray
     x: np.ndarray
     y: np.ndarray
     centre: np.ndarray
     spread: np.ndarray
+    slack: np.ndarray
 
 
 def shallow_hits(
@@ -54,7 +58,10 @@ def shallow_hits(
     sin_in: np.ndarray,
     length: np.ndarray,
 ) -> np.ndarray:
-    """(c, H) bool: hits whose path cuts the outline no deeper than `geometric`.
+    """(c, H) bool: hits whose path cuts the outline no deeper than the
+    recognition lets a path run into it: `geometric` (the pose may stand that far
+    off) plus the vertex zone (the shrink of the outline it checks paths against,
+    as much again, and the position error).
 
     The chord from the entry (`dist`) to the next crossing, of length L, meets
     the entry face at sin(a) = `sin_in` and the exit face at sin(b). A point s
@@ -62,8 +69,8 @@ def shallow_hits(
     from the exit face's, so no point of the chord is deeper than
     ``L sin(a) sin(b) / (sin(a) + sin(b))`` (other faces only make it shallower),
     nor than L / 2. The recognition keeps a hypothesis after a miss unless the
-    path enters its outline shrunk by that tolerance, so a shallow hit may well be
-    a miss (or meet what lies beyond).
+    path enters its outline shrunk by half its error disk (at a pose within the
+    bound), so a shallow hit may well be a miss (or meet what lies beyond).
     """
     later = np.where(t > (dist + fc.margin)[..., None], t, np.inf)
     exit_face = np.argmin(later, axis=-1)
@@ -72,88 +79,150 @@ def shallow_hits(
     sin_out = np.abs(dx * fc.nx[rows, exit_face] + dy * fc.ny[rows, exit_face])
     corner = chord * sin_in * sin_out / np.maximum(sin_in + sin_out, 1e-12)
     depth = np.minimum(np.where(np.isfinite(t_exit), corner, chord), chord / 2)
-    return hit & (depth < fc.geometric)
+    return hit & (depth < fc.geometric + fc.vertex_tol)
 
 
 #: Samples along the path past a hit, half a vertex zone apart, looking for depth.
-_STRETCH_SAMPLES = 8
+_STRETCH_SAMPLES = 16
 
 
-def thin_stretch(
+@dataclass(frozen=True, eq=False)
+class Stretch:
+    """Where past its nominal hit a path may still meet the true outline, each
+    (c, H): `length` how far past the hit the path stays shallow enough for a
+    contact, `lo` and `hi` the range of normal angles (radians, from the hit
+    face's) of the other faces a contact there may lie on (both 0 when there is
+    none), `open` whether the path was still shallow at the last sample."""
+
+    length: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+    open: np.ndarray
+
+    @property
+    def other_faces(self) -> np.ndarray:
+        """(c, H): a contact past the hit may lie on another face (or anywhere)."""
+        return self.open | (self.lo < 0) | (self.hi > 0)
+
+
+def stretch_past_hits(
     fc: CastFaces,
     origins: np.ndarray,
     t: np.ndarray,
     dist: np.ndarray,
     hit: np.ndarray,
-    vertex: np.ndarray,
-    face_len: np.ndarray,
     f: np.ndarray,
     dx: np.ndarray,
     dy: np.ndarray,
-) -> np.ndarray:
-    """(c, H): how far past the hit (on face `f`) the path stays within `geometric` of the
-    outline, for hits on short faces (under four vertex zones) or near a vertex,
-    where thin features live; 0 elsewhere.
+    length: np.ndarray,
+) -> Stretch:
+    """How far past each hit (on face `f`) a contact may still come, and on which
+    other faces.
 
-    The recognition explains a contact anywhere the path has not yet entered the
-    outline shrunk by `geometric` (plus the position error): through a feature
-    thinner than twice that, the contact may come well past the nominal hit, on
-    another face. Points half a vertex zone apart are tested (inside the outline:
-    before the next crossing) until one lies deeper than `geometric`; the stretch
-    ends there, at most `_STRETCH_SAMPLES` steps on.
+    The recognition keeps a hypothesis whose path, up to the contact less the
+    position error, stays clear of an outline shrunk by half its error disk, at
+    a pose anywhere within the bound: the path may run into the nominal outline
+    up to `geometric` (the shift) plus `geometric` (the shrink) plus the position
+    error before a contact, and the contact may lie on any face within
+    `geometric` plus the position error (the vertex zone) of the path there that
+    the path may meet from outside (turned toward it within the rotation bound).
+    Points half a vertex zone apart are tested from the hit on, up to the exit
+    from the outline, the path's end or the first point deeper than that (at
+    most `_STRETCH_SAMPLES` steps on); a face counts within the vertex zone plus
+    half a step of a point, so that nothing between two points is missed.
     """
-    out = np.zeros(hit.shape)
-    c, h = np.nonzero(hit & (vertex | (face_len < 4 * fc.vertex_tol[None, :])))
+    zero = np.zeros(hit.shape)
+    out = Stretch(zero, zero.copy(), zero.copy(), np.zeros(hit.shape, dtype=bool))
+    c, h = np.nonzero(hit)
     if not len(c):
         return out
     step = fc.vertex_tol[h] / 2
     later = np.where(t[c, h] > (dist[c, h] + fc.margin)[:, None], t[c, h], np.inf)
-    t_exit = later.min(axis=-1)
-    k = np.arange(1, _STRETCH_SAMPLES + 1)
-    s = dist[c, h, None] + k * step[:, None]  # (n, M)
+    # the path ends at the exit from the outline or at its own end
+    t_exit = np.minimum(later.min(axis=-1), length[c, 0])
+    k = np.arange(_STRETCH_SAMPLES + 1)
+    s = dist[c, h, None] + k * step[:, None]  # (n, M + 1), sample 0 at the hit
     qx = origins[c, 0, None] + s * dx[c, 0, None]
     qy = origins[c, 1, None] + s * dy[c, 0, None]
+    reach = fc.vertex_tol + fc.vertex_tol / 4
+    deep = np.maximum(fc.geometric + fc.vertex_tol, reach)
     first = np.empty(len(c), dtype=np.int64)
+    lo, hi = np.zeros(len(c)), np.zeros(len(c))
     points = (c_array(qx, float), c_array(qy, float), c_array(s, float), c_array(t_exit, float))
     rows = (c_array(h, np.int64), c_array(f[c, h], np.int64))
-    faces = [c_array(a, float) for a in (fc.sx, fc.sy, fc.ex, fc.ey)]
-    tolerance = c_array(fc.geometric, float)
-    _first_deep(*points, *rows, *faces, c_array(fc.valid, bool), tolerance, first)
-    out[c, h] = np.minimum(first * step, t_exit - dist[c, h])
+    faces = [c_array(a, float) for a in (fc.sx, fc.sy, fc.ex, fc.ey, fc.nx, fc.ny)]
+    path = (c_array(dx[c, 0], float), c_array(dy[c, 0], float))
+    limits = (c_array(deep, float), c_array(reach, float), c_array(fc.turn_sin, float))
+    valid = c_array(fc.valid, bool)
+    _stretch_kernel(*points, *rows, *faces, valid, *path, *limits, first, lo, hi)  # type: ignore[call-arg]
+    out.length[c, h] = np.minimum(first * step, np.maximum(t_exit - dist[c, h], 0.0))
+    out.lo[c, h], out.hi[c, h] = lo, hi
+    out.open[c, h] = first > _STRETCH_SAMPLES
     return out
 
 
 @numba.njit(cache=True, nogil=True)
-def _first_deep(qx, qy, s, t_exit, h, hint, sx, sy, ex, ey, valid, geometric, first):  # type: ignore[no-untyped-def]
-    """first[i] = 1 + the first sample k of hit i (points qx, qy (n, M) at `s` along
-    the path, on hypothesis h[i]) past the exit or farther than geometric[h[i]] from
-    every valid face; M when none is. A sample is shallow as soon as one face lies
-    within `geometric`, so its scan starts at the face the last one stopped at
-    (first the face hit, `hint`) and goes outward both ways: about one face per
-    shallow sample, all of them for the deep one that ends the stretch."""
+def _stretch_kernel(  # type: ignore[no-untyped-def]
+    qx, qy, s, t_exit, h, hit_face, sx, sy, ex, ey, nx, ny, valid, dx, dy, deep, reach, turn_sin,
+    first, lo, hi,
+):  # fmt: skip
+    """For hit i (points qx, qy (n, M + 1) at `s` along the path, sample 0 at the
+    hit, on hypothesis h[i] and face hit_face[i]): first[i] = the first sample past
+    the exit or deeper than deep[h[i]] from every valid face (M + 1 when none is);
+    lo[i], hi[i] the range of normal angles, from the hit face's, of the faces
+    the path may meet (d . n < turn_sin[h[i]]) within reach[h[i]] of a sample
+    before that one."""
     n, m = qx.shape
     n_faces = sx.shape[1]
+    near = np.empty(n_faces, dtype=np.int64)
     for i in range(n):
-        row, near = h[i], hint[i]
+        row, own = h[i], hit_face[i]
+        base = math.atan2(ny[row, own], nx[row, own])
         first[i] = m
+        lo[i], hi[i] = 0.0, 0.0
+        # only faces whose boxes come within the larger limit of the samples' box
+        # can be near any sample (the others lie deeper than `deep` from them all)
+        last = 0
+        while last + 1 < m and s[i, last + 1] < t_exit[i]:
+            last += 1
+        pad = max(deep[row], reach[row])
+        x0, x1 = min(qx[i, 0], qx[i, last]) - pad, max(qx[i, 0], qx[i, last]) + pad
+        y0, y1 = min(qy[i, 0], qy[i, last]) - pad, max(qy[i, 0], qy[i, last]) + pad
+        count = 0
+        for j in range(n_faces):
+            if valid[row, j] and not (
+                max(sx[row, j], ex[row, j]) < x0
+                or min(sx[row, j], ex[row, j]) > x1
+                or max(sy[row, j], ey[row, j]) < y0
+                or min(sy[row, j], ey[row, j]) > y1
+            ):
+                near[count] = j
+                count += 1
         for k in range(m):
-            if s[i, k] >= t_exit[i]:
-                first[i] = k + 1
+            if k > 0 and s[i, k] >= t_exit[i]:
+                first[i] = k
                 break
-            shallow = False
-            for j in range(n_faces):
-                f = outward(near, j, n_faces)
-                if not valid[row, f]:
+            nearest = np.inf
+            px, py = qx[i, k], qy[i, k]
+            for c in range(count):
+                j = near[c]
+                if (
+                    max(sx[row, j], ex[row, j]) < px - pad
+                    or min(sx[row, j], ex[row, j]) > px + pad
+                    or max(sy[row, j], ey[row, j]) < py - pad
+                    or min(sy[row, j], ey[row, j]) > py + pad
+                ):
+                    continue  # farther than both limits
+                d = math.hypot(*segment_gap(px, py, sx[row, j], sy[row, j], ex[row, j], ey[row, j]))
+                nearest = min(nearest, d)
+                facing = dx[i] * nx[row, j] + dy[i] * ny[row, j] < turn_sin[row]
+                if j == own or d > reach[row] or not facing:
                     continue
-                gap = segment_gap(
-                    qx[i, k], qy[i, k], sx[row, f], sy[row, f], ex[row, f], ey[row, f]
-                )
-                d = math.hypot(*gap)
-                if d < geometric[row]:
-                    shallow, near = True, f
-                    break
-            if not shallow:
-                first[i] = k + 1
+                turn = math.atan2(ny[row, j], nx[row, j]) - base
+                turn = (turn + math.pi) % (2 * math.pi) - math.pi
+                lo[i], hi[i] = min(lo[i], turn), max(hi[i], turn)
+            if nearest > deep[row]:
+                first[i] = k
                 break
 
 
@@ -186,7 +255,9 @@ def close_passes(
         fc.nx[rows, before][at], fc.ny[rows, before][at], fc.nx[rows, k][at], fc.ny[rows, k][at]
     )
     nan = np.full(hit.shape, np.nan)
-    return NearContact(flag, np.where(flag, vx, nan), np.where(flag, vy, nan), centre, spread)
+    return NearContact(
+        flag, np.where(flag, vx, nan), np.where(flag, vy, nan), centre, spread, np.zeros(hit.shape)
+    )
 
 
 def slip_past(
@@ -222,40 +293,145 @@ def slip_past(
 def near_misses(
     fc: CastFaces, origins: np.ndarray, directions: np.ndarray, lengths: np.ndarray, hit: np.ndarray
 ) -> NearContact:
-    """Misses passing within `geometric` of an outline, at the closest outline
-    point, with the normals there."""
-    ex_r = origins[:, 0] + directions[:, 0] * lengths
-    ey_r = origins[:, 1] + directions[:, 1] * lengths
+    """Misses passing within the vertex zone (`geometric` plus the position error)
+    of a face they may meet (turned toward the path within the rotation bound): at
+    a pose within the bound that face may stand where the path passes. Every
+    point of the path so near some such face is covered, as one stretch along it
+    from the first to the last, with the range of those faces' normals."""
     ox, oy = origins[:, 0, None], origins[:, 1, None]
+    ex_r = ox + directions[:, 0, None] * lengths[:, None]
+    ey_r = oy + directions[:, 1, None] * lengths[:, None]
     # a miss can only pass near the outline if it passes near its bounding circle
-    to_centre = segment_distance(fc.centre_x, fc.centre_y, ox, oy, ex_r[:, None], ey_r[:, None])
-    c, h = np.nonzero(~hit & (to_centre - fc.radius <= fc.geometric + fc.margin))
-    ox, oy, rx, ry = ox[c], oy[c], ex_r[c, None], ey_r[c, None]
-    sx, sy, ex, ey = fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h]
-    # the closest approach of two segments involves an endpoint of one of them
-    d_start = segment_distance(sx, sy, ox, oy, rx, ry)
-    d_end = segment_distance(ex, ey, ox, oy, rx, ry)
-    d_ray = segment_distance(rx, ry, sx, sy, ex, ey)
-    gap = np.where(fc.valid[h], np.minimum(np.minimum(d_start, d_end), d_ray), np.inf)
-    near_face = np.argmin(gap, axis=-1)[:, None]
-    pick = lambda a: np.take_along_axis(a, near_face, axis=-1)[:, 0]  # noqa: E731
-    close = pick(gap) <= fc.geometric[h]
-    which = np.argmin(np.stack([pick(d_start), pick(d_end), pick(d_ray)]), axis=0)
-    nf = near_face[:, 0]
-    x0, y0, x1, y1 = fc.sx[h, nf], fc.sy[h, nf], fc.ex[h, nf], fc.ey[h, nf]
-    ux, uy = x1 - x0, y1 - y0
-    proj = np.clip(
-        ((rx[:, 0] - x0) * ux + (ry[:, 0] - y0) * uy) / np.maximum(ux * ux + uy * uy, 1e-300),
-        0.0,
-        1.0,
+    to_centre = segment_distance(fc.centre_x, fc.centre_y, ox, oy, ex_r, ey_r)
+    c, h = np.nonzero(~hit & (to_centre - fc.radius <= fc.vertex_tol + fc.margin))
+    near = np.ones((len(c), fc.valid.shape[1]), dtype=bool)
+    return _near_stretch(
+        fc, origins, directions, c, h, np.zeros(len(c)), lengths[c], near, hit.shape
     )
-    # at a vertex of the face the normal may be either face's; on the face, its own
-    px = np.where(which == 0, x0, np.where(which == 1, x1, x0 + proj * ux))
-    py = np.where(which == 0, y0, np.where(which == 1, y1, y0 + proj * uy))
-    other = np.where(which == 0, fc.prev[h, nf], fc.next[h, nf])
-    other = np.where(which == 2, nf, other)
-    centre, spread = angle_cone(fc.nx[h, nf], fc.ny[h, nf], fc.nx[h, other], fc.ny[h, other])
-    out = [np.zeros(hit.shape, dtype=bool), *(np.full(hit.shape, np.nan) for _ in range(4))]
-    for target, value in zip(out, (close, px, py, centre, spread), strict=True):
-        target[c, h] = value
+
+
+def near_after_slip(
+    fc: CastFaces,
+    origins: np.ndarray,
+    directions: np.ndarray,
+    lengths: np.ndarray,
+    slip: np.ndarray,
+    dist: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+) -> NearContact:
+    """Where a path that may slip past its contact (`slip`, at `dist` along it, the
+    point `px`, `py`) passes on within the vertex zone of a face it may meet, as in
+    :func:`near_misses`, beyond the contact and leaving out the faces within the
+    vertex zone of the contact (the nominal and vertex outcomes cover those)."""
+    c, h = np.nonzero(slip)
+    at_contact = (
+        segment_distance(px[c, h, None], py[c, h, None], fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h])
+        <= fc.vertex_tol[h, None]
+    )
+    return _near_stretch(
+        fc, origins, directions, c, h, dist[c, h], lengths[c], ~at_contact, slip.shape
+    )
+
+
+def _near_stretch(
+    fc: CastFaces,
+    origins: np.ndarray,
+    directions: np.ndarray,
+    c: np.ndarray,
+    h: np.ndarray,
+    start: np.ndarray,
+    end: np.ndarray,
+    allowed: np.ndarray,
+    shape: tuple[int, ...],
+) -> NearContact:
+    """For pairs (path c, hypothesis h), the stretch of each path between `start`
+    and `end` along it within the vertex zone of an `allowed` ((n, F)) face it may
+    meet, as a point mid-way with that slack, and the cone of those faces'
+    normals; a NearContact of `shape` (unset elsewhere)."""
+    ox, oy = origins[c, 0, None], origins[c, 1, None]
+    dx, dy = directions[c, 0, None], directions[c, 1, None]
+    nx, ny = fc.nx[h], fc.ny[h]
+    lo, hi = _capsule_interval(
+        ox, oy, dx, dy, fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h], fc.vertex_tol[h, None]
+    )
+    lo, hi = np.maximum(lo, start[:, None]), np.minimum(hi, end[:, None])
+    near = fc.valid[h] & allowed & (dx * nx + dy * ny < fc.turn_sin[h, None]) & (lo <= hi)
+    flag = near.any(axis=-1)
+    # rows with no near face keep their infinities out of the sums
+    s_lo = np.where(flag, np.where(near, lo, np.inf).min(axis=-1), 0.0)
+    s_hi = np.where(flag, np.where(near, hi, -np.inf).max(axis=-1), 0.0)
+    angle = np.arctan2(ny, nx)
+    base = np.take_along_axis(angle, np.argmax(near, axis=-1)[:, None], axis=-1)
+    turn = (angle - base + math.pi) % (2 * math.pi) - math.pi
+    t_lo = np.where(flag, np.where(near, turn, np.inf).min(axis=-1), 0.0)
+    t_hi = np.where(flag, np.where(near, turn, -np.inf).max(axis=-1), 0.0)
+    mid = (s_lo + s_hi) / 2
+    values = (
+        flag,
+        ox[:, 0] + mid * dx[:, 0],
+        oy[:, 0] + mid * dy[:, 0],
+        base[:, 0] + (t_lo + t_hi) / 2,
+        np.minimum((t_hi - t_lo) / 2, math.pi),
+        (s_hi - s_lo) / 2,
+    )
+    out = [np.zeros(shape, dtype=bool), *(np.full(shape, np.nan) for _ in range(4))]
+    out.append(np.zeros(shape))
+    for target, value in zip(out, values, strict=True):
+        target[c[flag], h[flag]] = value[flag]
     return NearContact(*out)
+
+
+def _capsule_interval(
+    ox: np.ndarray,
+    oy: np.ndarray,
+    dx: np.ndarray,
+    dy: np.ndarray,
+    ax: np.ndarray,
+    ay: np.ndarray,
+    bx: np.ndarray,
+    by: np.ndarray,
+    r: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where along the line o + s d (unit d) the points lie within `r` of the
+    segment [a, b] (broadcast): the interval [lo, hi] (lo > hi when empty). The
+    set is convex, the union of the line's chords through the two end disks and
+    through the band along the segment."""
+    ends = [_disk_chord(ox, oy, dx, dy, px, py, r) for px, py in ((ax, ay), (bx, by))]
+    length = np.hypot(bx - ax, by - ay)
+    ux, uy = (bx - ax) / np.maximum(length, 1e-300), (by - ay) / np.maximum(length, 1e-300)
+    # the band: |u x (p - a)| <= r and 0 <= (p - a) . u <= |b - a|, each linear in s
+    side = _linear_range(ux * (oy - ay) - uy * (ox - ax), ux * dy - uy * dx, -r, r)
+    along = _linear_range((ox - ax) * ux + (oy - ay) * uy, dx * ux + dy * uy, 0.0, length)
+    band = (np.maximum(side[0], along[0]), np.minimum(side[1], along[1]))
+    pieces = [*ends, band]
+    lo = np.minimum.reduce([np.where(p[0] <= p[1], p[0], np.inf) for p in pieces])
+    hi = np.maximum.reduce([np.where(p[0] <= p[1], p[1], -np.inf) for p in pieces])
+    return lo, hi
+
+
+def _disk_chord(
+    ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray,
+    px: np.ndarray, py: np.ndarray, r: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
+    """The interval of s where o + s d lies within `r` of p (lo > hi when empty)."""
+    wx, wy = px - ox, py - oy
+    centre, off = wx * dx + wy * dy, wx * dy - wy * dx
+    half_sq = r * r - off * off
+    half = np.sqrt(np.maximum(half_sq, 0.0))
+    return np.where(half_sq >= 0, centre - half, np.inf), np.where(
+        half_sq >= 0, centre + half, -np.inf
+    )
+
+
+def _linear_range(
+    start: np.ndarray, rate: np.ndarray, low: np.ndarray | float, high: np.ndarray | float
+) -> tuple[np.ndarray, np.ndarray]:
+    """The interval of s where low <= start + s rate <= high (lo > hi when empty)."""
+    flat = np.abs(rate) < 1e-12
+    with np.errstate(divide="ignore", invalid="ignore"):
+        a, b = (low - start) / rate, (high - start) / rate
+    inside = (start >= low) & (start <= high)
+    lo = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(a, b))
+    hi = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(a, b))
+    return lo, hi

@@ -108,6 +108,50 @@ def _cone(a, b):
     return float(wrap_angle(ang_a + diff / 2)), abs(diff) / 2
 
 
+def _within(o, d, length, a, b, r, start=0.0, steps=80):
+    """The stretch [lo, hi] of s in [start, length] where o + s d lies within r of
+    the segment [a, b], or None: the distance is convex in s, so its least point is
+    found by ternary search and the ends by bisection on each side."""
+
+    def gap(t):
+        return _seg_dist(o + t * d, a, b)
+
+    lo, hi = float(start), float(length)
+    for _ in range(steps):
+        m1, m2 = lo + (hi - lo) / 3, hi - (hi - lo) / 3
+        lo, hi = (lo, m2) if gap(m1) <= gap(m2) else (m1, hi)
+    best = (lo + hi) / 2
+    if gap(best) > r:
+        return None
+
+    def edge(inside, outside):
+        if gap(outside) <= r:
+            return outside
+        for _ in range(steps):
+            mid = (inside + outside) / 2
+            inside, outside = (mid, outside) if gap(mid) <= r else (inside, mid)
+        return inside
+
+    return edge(best, float(start)), edge(best, float(length))
+
+
+def _near_slot(o, d, length, s, e, n, faces, r, start=0.0):
+    """The slot of every stretch of the path from `start` on within `r` of one of
+    `faces`, as one stretch with the cone of their normals (None if there is none)."""
+    spans = [(g, _within(o, d, length, s[g], e[g], r, start)) for g in faces]
+    spans = [(g, span) for g, span in spans if span is not None]
+    if not spans:
+        return None
+    lo, hi = min(span[0] for _, span in spans), max(span[1] for _, span in spans)
+    base = math.atan2(n[spans[0][0]][1], n[spans[0][0]][0])
+    turns = [
+        (math.atan2(n[g][1], n[g][0]) - base + math.pi) % (2 * math.pi) - math.pi for g, _ in spans
+    ]
+    centre = base + (min(turns) + max(turns)) / 2
+    spread = min((max(turns) - min(turns)) / 2, math.pi)
+    return (True, True, o + (lo + hi) / 2 * d, centre, spread, (hi - lo) / 2)
+
+
 def reference_outcome(posed, h, o, d, length, sensor, config):
     """One path against one hypothesis with loops: (nominal, flags, slots)."""
     faces = [f for f in range(posed.valid.shape[1]) if posed.valid[h, f]]
@@ -115,6 +159,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
     geometric = posed.eps_t[h] / 2 + config.contact_patch + 1e-9 * posed.scale
     vertex_tol = geometric + sensor.position_error
     graze = math.sin(min(config.grazing_angle + posed.rotation[h], math.pi / 2))
+    turn_sin = math.sin(min(posed.rotation[h], math.pi / 2))
 
     def hits(excluded=(), front_only=False, after=None):
         """The first face met (t, f), or the first crossing strictly beyond `after`."""
@@ -164,26 +209,35 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             a, b = cos_in, abs(float(d @ n[f_exit]))
             corner = chord * a * b / max(a + b, 1e-12)
             depth = min(depth, corner)
-        flags["shallow"] = depth < geometric
+        flags["shallow"] = depth < geometric + vertex_tol
         # close pass: a vertex outside the contact's zone within its zone of the way in
         passes = [(_seg_dist(s[k], o, p), k) for k in faces if math.hypot(*(s[k] - p)) > vertex_tol]
         gap, k = min(passes, default=(math.inf, -1))
         flags["close_pass"] = gap <= vertex_tol
-        # stretch: past a hit on a short face or near a vertex, how long the path stays
-        # within geometric of the outline
-        stretch = 0.0
-        if flags["vertex"] or posed.length[h, f] < 4 * vertex_tol:
-            step = vertex_tol / 2
-            end = t_exit if f_exit >= 0 else math.inf
-            stretch = min(8 * step, end - t)
-            for k in range(1, 9):
-                q = o + (t + k * step) * d
-                depth = min(_seg_dist(q, s[g], e[g]) for g in faces)
-                if depth >= geometric or t + k * step >= end:
-                    stretch = min(k * step, end - t)
-                    break
+        # stretch: past the hit, while the path lies within 2 geometric + eps_d of
+        # the outline (points half a vertex zone apart, up to the exit, 16 steps on),
+        # the other faces turned toward it within 1.25 vertex zones of a point
+        step, reach = vertex_tol / 2, 1.25 * vertex_tol
+        deep, end = max(geometric + vertex_tol, reach), (t_exit if f_exit >= 0 else length)
+        base, turns, first = math.atan2(normal[1], normal[0]), [0.0], 17
+        for j in range(17):
+            if j > 0 and t + j * step >= end:
+                first = j
+                break
+            q = o + (t + j * step) * d
+            gaps = {g: _seg_dist(q, s[g], e[g]) for g in faces}
+            turns += [
+                (math.atan2(n[g][1], n[g][0]) - base + math.pi) % (2 * math.pi) - math.pi
+                for g, gap in gaps.items()
+                if g != f and gap <= reach and float(d @ n[g]) < turn_sin
+            ]
+            if min(gaps.values()) > deep:
+                first = j
+                break
+        stretch = min(first * step, max(end - t, 0.0))
+        still_open = first > 16
+        flags["stretch"] = still_open or min(turns) < 0 or max(turns) > 0
         slack = along - geometric
-        flags["stretch"] = stretch > 2 * along
         away = float(d @ n[adjacent]) > -graze
         slip = (
             (flags["vertex"] and away)
@@ -191,22 +245,18 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             or flags["end_of_path"]
             or flags["shallow"]
         )
-        # slot 0: from the hit over the stretch; back to a close pass left without a slot
-        lo = t
-        if flags["close_pass"] and flags["vertex"] and slip:
-            lo = min(float((s[k] - o) @ d), t)
+        # slot 0: from the hit over the stretch, with the normals of the faces met
+        # there; back to a close pass left without a slot
+        crowded = flags["close_pass"] and flags["vertex"] and slip
+        lo = min(float((s[k] - o) @ d), t) if crowded else t
         hi = t + (stretch if flags["stretch"] else 0.0)
-        if hi > lo:
-            slots[0] = (
-                True,
-                True,
-                o + (lo + hi) / 2 * d,
-                math.atan2(normal[1], normal[0]),
-                math.pi,
-                slack + (hi - lo) / 2,
-            )
-        else:
-            slots[0] = (True, True, p, math.atan2(normal[1], normal[0]), 0.0, slack)
+        angle, spread = base, 0.0
+        if flags["stretch"]:
+            angle += (min(turns) + max(turns)) / 2
+            spread = min((max(turns) - min(turns)) / 2, math.pi)
+        if still_open or crowded:
+            spread = math.pi
+        slots[0] = (True, True, o + (lo + hi) / 2 * d, angle, spread, slack + (hi - lo) / 2)
         if flags["vertex"]:
             centre, spread = _cone(normal, n[adjacent])
             slots.append((True, True, p, centre, spread, slack))
@@ -220,25 +270,19 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
                 slots.append((True, False, None, 0.0, 0.0, 0.0))
             else:
                 slots.append((True, True, o + t2 * d, math.atan2(n[f2][1], n[f2][0]), 0.0, 0.0))
+            # slipping on, the path may meet a face it passes near further on
+            met = [g for g in faces if g not in near and float(d @ n[g]) < turn_sin]
+            slot = _near_slot(o, d, length, s, e, n, met, vertex_tol, start=t)
+            if slot is not None:
+                slots.append(slot)
     else:
-        end = o + length * d
-        best = (math.inf, None)
-        for g in faces:
-            options = [
-                (_seg_dist(s[g], o, end), s[g], n[posed.prev[h, g]]),
-                (_seg_dist(e[g], o, end), e[g], n[posed.next[h, g]]),
-            ]
-            edge = e[g] - s[g]
-            u = min(1.0, max(0.0, float((end - s[g]) @ edge) / float(edge @ edge)))
-            options.append((_seg_dist(end, s[g], e[g]), s[g] + u * edge, n[g]))
-            k = min(range(3), key=lambda i: options[i][0])
-            if options[k][0] < best[0]:
-                best = (options[k][0], (options[k][1], n[g], options[k][2]))
-        if best[0] <= geometric:
+        # a miss: every stretch of the path within the vertex zone of a face it may
+        # meet, found by bisection on the convex distance, as one stretch
+        met = [g for g in faces if float(d @ n[g]) < turn_sin]
+        slot = _near_slot(o, d, length, s, e, n, met, vertex_tol)
+        if slot is not None:
             flags["near_miss"] = True
-            point, a, b = best[1]
-            centre, spread = _cone(a, b)
-            slots.append((True, True, point, centre, spread, 0.0))
+            slots.append(slot)
     return (hit, t, f), flags, slots
 
 
