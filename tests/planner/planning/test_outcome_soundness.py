@@ -59,3 +59,27 @@ def test_classes_the_recognition_keeps_after_a_contact_were_confusable_on_its_pa
             if before[i].equivalence_class != before[j].equivalence_class
         ), f"classes kept after the contact at {point} were called distinguishable"
     assert len({h.equivalence_class for h in session.hypotheses}) == 2
+
+
+def test_a_path_slipping_through_a_thin_part_may_meet_a_face_it_passes_near():
+    """A table_poses world (the L prism, 1 mm / 3 degrees, two touches): the path
+    cuts the other stable pose's outline shallowly at 43 mm, passes on within its
+    vertex zone of a face at 120 mm, where the true contact lies; both classes
+    survive, so the model must not call the path sure."""
+    from tests.conftest import touched_session
+
+    bounds = SensorBounds(1.0, math.radians(3))
+    _, session, _ = touched_session("table_poses", bounds, 1908895, 2)
+    path = SensingPath((141.39343, 141.44928), (-0.5, -0.8660254), 386.39076)
+    contact = Contact((81.89839, 37.21647), (0.90372765, 0.42810785))
+    after = session.observe(Observation(path, contact))
+    assert len({h.equivalence_class for h in after.hypotheses}) == 2
+    before = list(session.hypotheses)
+    posed = pose_hypotheses(before, session.models_by_name)
+    out = predict_outcomes(
+        posed, np.array([path.origin]), np.array([path.direction]), np.array([path.length]),
+        session.working_sensor,
+    )  # fmt: skip
+    classes = posed.cls
+    confusable = confusability(posed, out, session.working_sensor)[0]
+    assert confusable[np.ix_(classes == 0, classes == 1)].any()
