@@ -22,6 +22,7 @@ from planner.planning.uncertain_hits import (
     NearContact,
     Stretch,
     close_passes,
+    exits,
     near_after_slip,
     near_misses,
     shallow_hits,
@@ -262,8 +263,9 @@ def _doubts(
     along = geometric / np.maximum(cos_in, graze_sin)
     end_of_path = hit & (dist > length - along)
     facing_away = dx * adj_x + dy * adj_y > -graze_sin
-    shallow = shallow_hits(fc, t, dist, hit, f, rows, dx, dy, cos_in, length)
-    stretch = stretch_past_hits(fc, origins, t, dist, hit, f, dx, dy, length)
+    t_exit, exit_face = exits(fc, t, dist)
+    shallow = shallow_hits(fc, t_exit, exit_face, dist, hit, rows, dx, dy, cos_in, length)
+    stretch = stretch_past_hits(fc, origins, t_exit, dist, hit, f, dx, dy, length)
     slip = (vertex & facing_away) | grazing | end_of_path | shallow
     slip_hit, slip_dist, slip_angle = slip_past(fc, t, slip, end_of_path, hits.px, hits.py, dx, dy)
     return _Doubts(

@@ -23,6 +23,7 @@ __all__ = [
     "NearContact",
     "Stretch",
     "close_passes",
+    "exits",
     "near_after_slip",
     "near_misses",
     "shallow_hits",
@@ -46,12 +47,21 @@ class NearContact:
     slack: np.ndarray
 
 
+def exits(fc: CastFaces, t: np.ndarray, dist: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(c, H) each: how far along the path it next crosses a face past its hit at
+    `dist` (inf if it does not, or misses), and that face (0 if none); `t` (c, H, F)
+    where the path meets each face."""
+    later = np.where(t > (dist + fc.margin)[..., None], t, np.inf)
+    exit_face = np.argmin(later, axis=-1)
+    return np.take_along_axis(later, exit_face[..., None], axis=-1)[..., 0], exit_face
+
+
 def shallow_hits(
     fc: CastFaces,
-    t: np.ndarray,
+    t_exit: np.ndarray,
+    exit_face: np.ndarray,
     dist: np.ndarray,
     hit: np.ndarray,
-    f: np.ndarray,
     rows: np.ndarray,
     dx: np.ndarray,
     dy: np.ndarray,
@@ -63,7 +73,8 @@ def shallow_hits(
     off) plus the vertex zone (the shrink of the outline it checks paths against,
     as much again, and the position error).
 
-    The chord from the entry (`dist`) to the next crossing, of length L, meets
+    The chord from the entry (`dist`) to the next crossing (`t_exit`, on face
+    `exit_face`: :func:`exits`), of length L, meets
     the entry face at sin(a) = `sin_in` and the exit face at sin(b). A point s
     along it lies ``s sin(a)`` from the entry face's line and ``(L - s) sin(b)``
     from the exit face's, so no point of the chord is deeper than
@@ -72,9 +83,6 @@ def shallow_hits(
     path enters its outline shrunk by half its error disk (at a pose within the
     bound), so a shallow hit may well be a miss (or meet what lies beyond).
     """
-    later = np.where(t > (dist + fc.margin)[..., None], t, np.inf)
-    exit_face = np.argmin(later, axis=-1)
-    t_exit = np.take_along_axis(later, exit_face[..., None], axis=-1)[..., 0]
     chord = np.where(np.isfinite(t_exit), t_exit, length) - np.where(hit, dist, 0.0)
     sin_out = np.abs(dx * fc.nx[rows, exit_face] + dy * fc.ny[rows, exit_face])
     corner = chord * sin_in * sin_out / np.maximum(sin_in + sin_out, 1e-12)
@@ -108,7 +116,7 @@ class Stretch:
 def stretch_past_hits(
     fc: CastFaces,
     origins: np.ndarray,
-    t: np.ndarray,
+    t_exit: np.ndarray,
     dist: np.ndarray,
     hit: np.ndarray,
     f: np.ndarray,
@@ -137,25 +145,20 @@ def stretch_past_hits(
     if not len(c):
         return out
     step = fc.vertex_tol[h] / 2
-    later = np.where(t[c, h] > (dist[c, h] + fc.margin)[:, None], t[c, h], np.inf)
-    # the path ends at the exit from the outline or at its own end
-    t_exit = np.minimum(later.min(axis=-1), length[c, 0])
-    k = np.arange(_STRETCH_SAMPLES + 1)
-    s = dist[c, h, None] + k * step[:, None]  # (n, M + 1), sample 0 at the hit
-    qx = origins[c, 0, None] + s * dx[c, 0, None]
-    qy = origins[c, 1, None] + s * dy[c, 0, None]
+    # the path ends at the exit from the outline (:func:`exits`) or at its own end
+    end = np.minimum(t_exit[c, h], length[c, 0])
     reach = fc.vertex_tol + fc.vertex_tol / 4
     deep = np.maximum(fc.geometric + fc.vertex_tol, reach)
     first = np.empty(len(c), dtype=np.int64)
     lo, hi = np.zeros(len(c)), np.zeros(len(c))
-    points = (c_array(qx, float), c_array(qy, float), c_array(s, float), c_array(t_exit, float))
+    path = [c_array(a, float) for a in (origins[c, 0], origins[c, 1], dx[c, 0], dy[c, 0])]
+    samples = (c_array(dist[c, h], float), c_array(step, float), c_array(end, float))
     rows = (c_array(h, np.int64), c_array(f[c, h], np.int64))
     faces = [c_array(a, float) for a in (fc.sx, fc.sy, fc.ex, fc.ey, fc.nx, fc.ny)]
-    path = (c_array(dx[c, 0], float), c_array(dy[c, 0], float))
     limits = (c_array(deep, float), c_array(reach, float), c_array(fc.turn_sin, float))
     valid = c_array(fc.valid, bool)
-    _stretch_kernel(*points, *rows, *faces, valid, *path, *limits, first, lo, hi)  # type: ignore[call-arg]
-    out.length[c, h] = np.minimum(first * step, np.maximum(t_exit - dist[c, h], 0.0))
+    _stretch_kernel(*path, *samples, *rows, *faces, valid, *limits, first, lo, hi)  # type: ignore[call-arg]
+    out.length[c, h] = np.minimum(first * step, np.maximum(end - dist[c, h], 0.0))
     out.lo[c, h], out.hi[c, h] = lo, hi
     out.open[c, h] = first > _STRETCH_SAMPLES
     return out
@@ -163,47 +166,48 @@ def stretch_past_hits(
 
 @numba.njit(cache=True, nogil=True)
 def _stretch_kernel(  # type: ignore[no-untyped-def]
-    qx, qy, s, t_exit, h, hit_face, sx, sy, ex, ey, nx, ny, valid, dx, dy, deep, reach, turn_sin,
-    first, lo, hi,
+    ox, oy, dx, dy, dist, step, end, h, hit_face, sx, sy, ex, ey, nx, ny, valid,
+    deep, reach, turn_sin, first, lo, hi,
 ):  # fmt: skip
-    """For hit i (points qx, qy (n, M + 1) at `s` along the path, sample 0 at the
-    hit, on hypothesis h[i] and face hit_face[i]): first[i] = the first sample past
-    the exit or deeper than deep[h[i]] from every valid face (M + 1 when none is);
-    lo[i], hi[i] the range of normal angles, from the hit face's, of the faces
-    the path may meet (d . n < turn_sin[h[i]]) within reach[h[i]] of a sample
-    before that one."""
-    n, m = qx.shape
-    n_faces = sx.shape[1]
+    """For hit i (path from ox[i], oy[i] along dx[i], dy[i], the hit at dist[i],
+    on hypothesis h[i] and face hit_face[i]), points step[i] apart from the hit on,
+    M + 1 of them (M = `_STRETCH_SAMPLES`): first[i] = the first point at or past
+    end[i] (the exit or the path's end) or deeper than deep[h[i]] from every valid
+    face (M + 1 when none is); lo[i], hi[i] the range of normal angles, from the
+    hit face's, of the faces the path may meet (d . n < turn_sin[h[i]]) within
+    reach[h[i]] of a point before that one."""
+    m = _STRETCH_SAMPLES + 1
+    n, n_faces = len(ox), sx.shape[1]
     near = np.empty(n_faces, dtype=np.int64)
     for i in range(n):
         row, own = h[i], hit_face[i]
         base = math.atan2(ny[row, own], nx[row, own])
         first[i] = m
         lo[i], hi[i] = 0.0, 0.0
-        # only faces whose boxes come within the larger limit of the samples' box
-        # can be near any sample (the others lie deeper than `deep` from them all)
+        # only faces whose boxes come within the larger limit of the points' box can
+        # be near any point (the others lie deeper than `deep` from them all)
         last = 0
-        while last + 1 < m and s[i, last + 1] < t_exit[i]:
+        while last + 1 < m and dist[i] + (last + 1) * step[i] < end[i]:
             last += 1
         pad = max(deep[row], reach[row])
-        x0, x1 = min(qx[i, 0], qx[i, last]) - pad, max(qx[i, 0], qx[i, last]) + pad
-        y0, y1 = min(qy[i, 0], qy[i, last]) - pad, max(qy[i, 0], qy[i, last]) + pad
+        ax, ay = ox[i] + dist[i] * dx[i], oy[i] + dist[i] * dy[i]
+        bx, by = ax + last * step[i] * dx[i], ay + last * step[i] * dy[i]
         count = 0
         for j in range(n_faces):
             if valid[row, j] and not (
-                max(sx[row, j], ex[row, j]) < x0
-                or min(sx[row, j], ex[row, j]) > x1
-                or max(sy[row, j], ey[row, j]) < y0
-                or min(sy[row, j], ey[row, j]) > y1
+                max(sx[row, j], ex[row, j]) < min(ax, bx) - pad
+                or min(sx[row, j], ex[row, j]) > max(ax, bx) + pad
+                or max(sy[row, j], ey[row, j]) < min(ay, by) - pad
+                or min(sy[row, j], ey[row, j]) > max(ay, by) + pad
             ):
                 near[count] = j
                 count += 1
         for k in range(m):
-            if k > 0 and s[i, k] >= t_exit[i]:
+            if k > last:
                 first[i] = k
                 break
+            px, py = ax + k * step[i] * dx[i], ay + k * step[i] * dy[i]
             nearest = np.inf
-            px, py = qx[i, k], qy[i, k]
             for c in range(count):
                 j = near[c]
                 if (
