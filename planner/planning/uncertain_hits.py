@@ -191,7 +191,8 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
             last += 1
         pad = max(deep[row], reach[row])
         ax, ay = ox[i] + dist[i] * dx[i], oy[i] + dist[i] * dy[i]
-        bx, by = ax + last * step[i] * dx[i], ay + last * step[i] * dy[i]
+        s_last = dist[i] + last * step[i]
+        bx, by = ox[i] + s_last * dx[i], oy[i] + s_last * dy[i]
         count = 0
         for j in range(n_faces):
             if valid[row, j] and not (
@@ -206,7 +207,8 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
             if k > last:
                 first[i] = k
                 break
-            px, py = ax + k * step[i] * dx[i], ay + k * step[i] * dy[i]
+            s_k = dist[i] + k * step[i]
+            px, py = ox[i] + s_k * dx[i], oy[i] + s_k * dy[i]
             nearest = np.inf
             for c in range(count):
                 j = near[c]
