@@ -209,7 +209,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
             a, b = cos_in, abs(float(d @ n[f_exit]))
             corner = chord * a * b / max(a + b, 1e-12)
             depth = min(depth, corner)
-        flags["shallow"] = depth < geometric + vertex_tol
+        flags["shallow"] = depth < vertex_tol
         # close pass: a vertex outside the contact's zone within its zone of the way in
         passes = [(_seg_dist(s[k], o, p), k) for k in faces if math.hypot(*(s[k] - p)) > vertex_tol]
         gap, k = min(passes, default=(math.inf, -1))
@@ -218,7 +218,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
         # the outline (points half a vertex zone apart, up to the exit, 16 steps on),
         # the other faces turned toward it within 1.25 vertex zones of a point
         step, reach = vertex_tol / 2, 1.25 * vertex_tol
-        deep, end = max(geometric + vertex_tol, reach), (t_exit if f_exit >= 0 else length)
+        deep, end = reach, (t_exit if f_exit >= 0 else length)
         base, turns, first = math.atan2(normal[1], normal[0]), [0.0], 17
         for j in range(17):
             if j > 0 and t + j * step >= end:
