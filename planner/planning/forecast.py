@@ -290,13 +290,16 @@ class RefiningPrediction:
     """What the recognition predicts of shortlisted refining paths `rows` (best
     first: within the session's accuracy, then the smaller bound) for a session
     with one class left: the class' bound after each path's predicted contact
-    (`translation`, `rotation`, `eps_t`); `current` the bound now."""
+    (`translation`, `rotation`, `eps_t`); `current` the bound now; `pinning` the
+    shortlist itself, best pinning first (the paths whose predicted contact
+    constrains the pose most, judged or not)."""
 
     rows: np.ndarray
     translation: np.ndarray
     rotation: np.ndarray
     eps_t: np.ndarray
     current: tuple[float, float]
+    pinning: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=int))
 
 
 def recognition_refining(
@@ -340,11 +343,11 @@ def recognition_refining(
         )
     if not judged:
         none = np.zeros(0)
-        return RefiningPrediction(none.astype(int), none, none, none, current)
+        return RefiningPrediction(none.astype(int), none, none, none, current, shortlist)
     c, t, r, e, ok = (np.array(v) for v in zip(*judged, strict=True))
     share = t / accuracy.translation + r / accuracy.rotation
     order = np.lexsort((found.motion[c], share, ~ok))
-    return RefiningPrediction(c[order], t[order], r[order], e[order], current)
+    return RefiningPrediction(c[order], t[order], r[order], e[order], current, shortlist)
 
 
 def _constraint_gain(

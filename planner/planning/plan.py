@@ -376,6 +376,19 @@ def _refining_by_recognition(
         )
         for i, e in zip(judged.rows[useful], judged.eps_t[useful], strict=True)
     ][: config.max_paths]
+    if not paths and not len(judged.rows) and len(judged.pinning):
+        # no prediction the recognition could judge (a loosely pinned class' nominal
+        # pose is a fit that may lie off its contacts by more than the position error,
+        # and a contact predicted there contradicts them): the paths whose contact
+        # would pin the pose most, rather than none
+        paths = [_planned(found, int(i), ranking, family=REFINING) for i in judged.pinning][
+            : config.max_paths
+        ]
+        return paths, (
+            "one class left, its bound short of the required accuracy: the recognition "
+            "could not judge its predicted contacts (they contradict the contacts so "
+            "far); refining where a contact would pin the pose most"
+        )
     if not paths:
         return [], (
             "one class left, its bound short of the required accuracy; no path shrinks its "

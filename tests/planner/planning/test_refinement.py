@@ -300,3 +300,35 @@ def _normal_at(ring, point):
     d = (b[k] - a[k]) / np.linalg.norm(b[k] - a[k])
     n = np.array([d[1], -d[0]])
     return tuple(n if ring.is_ccw else -n)
+
+
+def test_a_class_whose_predicted_contacts_contradict_its_contacts_still_gets_a_path():
+    """A world of the shared curved set (the stadium, 1 mm / 0.05 rad, trial 32 of
+    a simulated run) touched three times: one class that can still slide 89 mm,
+    whose nominal pose (a fit) lies 3-7 mm off its contacts, so every contact the
+    recognition would predict there contradicts them. The plan offers the paths
+    whose contact would pin the pose most instead of none (the robot had stopped)."""
+    from planner.planning.plan import plan_session
+    from planner.types import Workspace
+    from tests.conftest import object_set
+
+    models = [m for m in object_set("curved") if len(m.stable_poses[0].outline) <= 500]
+    session = Session(models, SensorBounds(1.0, 0.05), Workspace((0, 0), 200))
+    for origin, direction, point, normal in [
+        ((200.0, 0.0), (-1.0, 0.0), (15.743227, 0.712612), (0.877868, -0.478903)),
+        (
+            (-141.421356, 141.421356), (0.722197, -0.691688),
+            (-24.847825, 29.478869), (-0.885085, 0.465429),
+        ),
+        (
+            (-193.196571, 51.721223), (0.861967, -0.506965),
+            (-59.369312, -27.824592), (-0.923441, 0.383741),
+        ),
+    ]:  # fmt: skip
+        path = SensingPath(origin, direction, 400.0)
+        session = session.observe(Observation(path, Contact(point, normal)))
+    where = session.localization
+    assert where.classes == 1 and where.missing == ("accuracy",)
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
+    assert found.paths and found.paths[0].family == REFINING
+    assert "pin the pose most" in (found.note or "")
