@@ -332,9 +332,8 @@ def _one_class(
     session: Session | None,
     budget: Budget,
 ) -> tuple[list[PlannedPath], str]:
-    """One class left, its bound short of the accuracy: the paths sure to shrink it
-    by the outcome model, else (given the session) those the recognition predicts
-    shrink it."""
+    """One class left, its bound short of the accuracy: the paths sure to shrink it by
+    the outcome model, or (given the session) those the recognition predicts do."""
     by_name = models_by_name(models)
     paths, note = _refining(
         found, hypotheses, by_name, contacts, sensor, _no_ranking(found), config
@@ -342,8 +341,7 @@ def _one_class(
     current = max(h.error_bound.eps_t for h in hypotheses)
     weak = not paths or (paths[0].expected_eps_t or current) > _WEAK_REFINEMENT * current
     if weak and session is not None:
-        # the outcome model credits few contacts where other faces lie near the one
-        # hit: the recognition's own predictions may find a better touch
+        # the outcome model credits few contacts near other faces: ask the recognition
         judged, judged_note = _refining_by_recognition(found, session, config, budget)
         if judged and (not paths or _eps_t(judged[0]) < _eps_t(paths[0])):
             paths, note = judged, judged_note
@@ -377,13 +375,10 @@ def _refining_by_recognition(
         for i, e in zip(judged.rows[useful], judged.eps_t[useful], strict=True)
     ][: config.max_paths]
     if not paths and not len(judged.rows) and len(judged.pinning):
-        # no prediction the recognition could judge (a loosely pinned class' nominal
-        # pose is a fit that may lie off its contacts by more than the position error,
-        # and a contact predicted there contradicts them): the paths whose contact
-        # would pin the pose most, rather than none
-        paths = [_planned(found, int(i), ranking, family=REFINING) for i in judged.pinning][
-            : config.max_paths
-        ]
+        # no prediction it could judge (a loosely pinned class' nominal pose, a fit, lies
+        # off its contacts): the paths whose contact would pin the pose most, not none
+        pinning = judged.pinning[: config.max_paths]
+        paths = [_planned(found, int(i), ranking, family=REFINING) for i in pinning]
         return paths, (
             "one class left, its bound short of the required accuracy: the recognition "
             "could not judge its predicted contacts (they contradict the contacts so "
