@@ -339,7 +339,7 @@ def _one_class(
         found, hypotheses, by_name, contacts, sensor, _no_ranking(found), config
     )
     current = max(h.error_bound.eps_t for h in hypotheses)
-    weak = not paths or (paths[0].expected_eps_t or current) > _WEAK_REFINEMENT * current
+    weak = not paths or _eps_t(paths[0]) > _WEAK_REFINEMENT * current
     if weak and session is not None:
         # the outcome model credits few contacts near other faces: ask the recognition
         judged, judged_note = _refining_by_recognition(found, session, config, budget)

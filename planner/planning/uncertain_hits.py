@@ -2,9 +2,10 @@
 
 Each function takes the posed faces (:class:`~planner.planning.cast_faces.CastFaces`)
 and arrays over c paths and H hypotheses from :mod:`planner.planning.casting`:
-a shallow hit (the path cuts the outline no deeper than the tolerance), a thin
-stretch past the hit, a slip past the contact to a later hit, a near miss, and a
-close pass by a vertex before the contact. World frame, lengths in the object
+a shallow hit (the path cuts the outline no deeper than the vertex zone), the
+stretch past a hit where a contact may still come on other faces, a slip past the
+contact to a later hit or to a face passed near further on, a miss's near
+approaches, and a close pass by a vertex before the contact. World frame, lengths in the object
 files' unit, angles in radians.
 """
 
@@ -149,16 +150,15 @@ def stretch_past_hits(
     # the path ends at the exit from the outline (:func:`exits`) or at its own end
     end = np.minimum(t_exit[c, h], length[c, 0])
     # a face counts within the vertex zone plus half a step of a point, and a point
-    # deeper than that from every face ends the stretch
+    # farther than that from every face ends the stretch
     reach = fc.vertex_tol + fc.vertex_tol / 4
-    deep = reach
     first = np.empty(len(c), dtype=np.int64)
     lo, hi = np.zeros(len(c)), np.zeros(len(c))
     path = [c_array(a, float) for a in (origins[c, 0], origins[c, 1], dx[c, 0], dy[c, 0])]
     samples = (c_array(dist[c, h], float), c_array(step, float), c_array(end, float))
     rows = (c_array(h, np.int64), c_array(f[c, h], np.int64))
     faces = [c_array(a, float) for a in (fc.sx, fc.sy, fc.ex, fc.ey, fc.nx, fc.ny)]
-    limits = (c_array(deep, float), c_array(reach, float), c_array(fc.turn_sin, float))
+    limits = (c_array(reach, float), c_array(fc.turn_sin, float))
     valid = c_array(fc.valid, bool)
     _stretch_kernel(*path, *samples, *rows, *faces, valid, *limits, first, lo, hi)  # type: ignore[call-arg]
     out.length[c, h] = np.minimum(first * step, np.maximum(end - dist[c, h], 0.0))
@@ -170,14 +170,14 @@ def stretch_past_hits(
 @numba.njit(cache=True, nogil=True)
 def _stretch_kernel(  # type: ignore[no-untyped-def]
     ox, oy, dx, dy, dist, step, end, h, hit_face, sx, sy, ex, ey, nx, ny, valid,
-    deep, reach, turn_sin, first, lo, hi,
+    reach, turn_sin, first, lo, hi,
 ):  # fmt: skip
     """For hit i (path from ox[i], oy[i] along dx[i], dy[i], the hit at dist[i],
     on hypothesis h[i] and face hit_face[i]), points step[i] apart from the hit on,
     M + 1 of them (M = `_STRETCH_SAMPLES`): first[i] = the first point at or past
-    end[i] (the exit or the path's end) or deeper than deep[h[i]] from every valid
-    face (M + 1 when none is); lo[i], hi[i] the range of normal angles, from the
-    hit face's, of the faces the path may meet (d . n < turn_sin[h[i]]) within
+    end[i] (the exit or the path's end) or farther than reach[h[i]] from every
+    valid face (M + 1 when none is); lo[i], hi[i] the range of normal angles, from
+    the hit face's, of the faces the path may meet (d . n < turn_sin[h[i]]) within
     reach[h[i]] of a point before that one."""
     m = _STRETCH_SAMPLES + 1
     n, n_faces = len(ox), sx.shape[1]
@@ -187,12 +187,12 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
         base = math.atan2(ny[row, own], nx[row, own])
         first[i] = m
         lo[i], hi[i] = 0.0, 0.0
-        # only faces whose boxes come within the larger limit of the points' box can
-        # be near any point (the others lie deeper than `deep` from them all)
+        # only faces whose boxes come within `reach` of the points' box can be near
+        # any point (the others lie farther than that from them all)
         last = 0
         while last + 1 < m and dist[i] + (last + 1) * step[i] < end[i]:
             last += 1
-        pad = max(deep[row], reach[row])
+        pad = reach[row]
         ax, ay = ox[i] + dist[i] * dx[i], oy[i] + dist[i] * dy[i]
         s_last = dist[i] + last * step[i]
         bx, by = ox[i] + s_last * dx[i], oy[i] + s_last * dy[i]
@@ -221,7 +221,7 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
                     or max(sy[row, j], ey[row, j]) < py - pad
                     or min(sy[row, j], ey[row, j]) > py + pad
                 ):
-                    continue  # farther than both limits
+                    continue  # farther than `reach`
                 d = math.hypot(*segment_gap(px, py, sx[row, j], sy[row, j], ex[row, j], ey[row, j]))
                 nearest = min(nearest, d)
                 facing = dx[i] * nx[row, j] + dy[i] * ny[row, j] < turn_sin[row]
@@ -230,7 +230,7 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
                 turn = math.atan2(ny[row, j], nx[row, j]) - base
                 turn = (turn + math.pi) % (2 * math.pi) - math.pi
                 lo[i], hi[i] = min(lo[i], turn), max(hi[i], turn)
-            if nearest > deep[row]:
+            if nearest > pad:
                 first[i] = k
                 break
 
