@@ -188,6 +188,7 @@ def _outcome_chunk(
         "shallow": doubt.shallow,
         "close_pass": close.flag,
         "stretch": doubt.stretch.other_faces,
+        "open_stretch": doubt.stretch.open,
         **_stacked(slots),
         "heading": np.arctan2(directions[:, 1], directions[:, 0]),
     }

@@ -82,7 +82,8 @@ class Outcomes:
     the vertex zone of another vertex: it may be met there first), `stretch` (past
     the hit the path stays shallow enough for a contact and passes near other
     faces, or stays so for long: slot 0 then spans that stretch with the normals of
-    those faces, or any normal).
+    those faces, or any normal), `open_stretch` (a stretch that may meet a face of
+    any normal: it was still shallow at its last point).
 
     Outcome slots (C, H, 4) list everything the outcome could turn out to be:
     slot 0 the nominal outcome, slot 1 a hit near the nominal point (or near the
@@ -111,6 +112,7 @@ class Outcomes:
     shallow: np.ndarray
     close_pass: np.ndarray
     stretch: np.ndarray
+    open_stretch: np.ndarray
     slot_valid: np.ndarray
     slot_hit: np.ndarray
     slot_point: np.ndarray

@@ -202,11 +202,9 @@ def _smooth_hits(
 def _uncertain_besides_vertices(outcomes: Outcomes, reps: np.ndarray) -> np.ndarray:
     """(C, K) the outcome may differ from the nominal one for a reason other than
     a vertex near the contact or passed on the way, or other faces near the path
-    past it (a stretch counts only when it is open to any face: slot 0's spread is
-    then a half turn)."""
+    past it (a stretch counts only when it is open to any face)."""
     o = outcomes
-    anywhere = o.stretch & (o.slot_spread[..., 0] >= math.pi)
-    return (o.grazing | o.near_miss | o.end_of_path | o.shallow | anywhere)[:, reps]
+    return (o.grazing | o.near_miss | o.end_of_path | o.shallow | o.open_stretch)[:, reps]
 
 
 def scores_after(

@@ -189,6 +189,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
         shallow=False,
         close_pass=False,
         stretch=False,
+        open_stretch=False,
     )
     slots = [(True, hit, o + t * d if hit else None, 0.0, 0.0, 0.0)]
     if hit:
@@ -237,6 +238,7 @@ def reference_outcome(posed, h, o, d, length, sensor, config):
         stretch = min(first * step, max(end - t, 0.0))
         still_open = first > 16
         flags["stretch"] = still_open or min(turns) < 0 or max(turns) > 0
+        flags["open_stretch"] = still_open
         slack = along - geometric
         away = float(d @ n[adjacent]) > -graze
         slip = (
@@ -520,6 +522,7 @@ def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
         shallow=np.zeros(hit.shape[:2], dtype=bool),
         close_pass=np.zeros(hit.shape[:2], dtype=bool),
         stretch=np.zeros(hit.shape[:2], dtype=bool),
+        open_stretch=np.zeros(hit.shape[:2], dtype=bool),
         slot_valid=valid,
         slot_hit=hit,
         slot_point=point,
