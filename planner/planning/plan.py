@@ -8,6 +8,9 @@ in three steps, each usable alone: :func:`~planner.planning.analysis.analyse`
 :func:`~planner.planning.strategies.rank_candidates` (the strategy, on the
 outcome matrix only) and the assembly of the plan. :func:`plan_session` plans on
 a session's state and adds the recognition's own forecast of the best paths.
+The refining paths of a class short of the accuracy are assembled in
+:mod:`planner.planning.refining_paths`, a candidate as a planned path in
+:mod:`planner.planning.planned`.
 All geometry is in the world frame, lengths in the object files' unit, angles in
 radians.
 """
@@ -15,7 +18,6 @@ radians.
 from __future__ import annotations
 
 import dataclasses
-import math
 import time
 from collections.abc import Mapping, Sequence
 from typing import Any
@@ -29,14 +31,13 @@ from planner.planning.config import StrategyConfig
 from planner.planning.forecast import (
     predictions,
     recognition_ranking,
-    recognition_refining,
     with_forecast,
 )
+from planner.planning.planned import planned
 from planner.planning.probes import opening_probe
-from planner.planning.refinement import refinement, scores_after
+from planner.planning.refining_paths import one_class_paths, refining_paths
 from planner.planning.representatives import face_counts, representatives
-from planner.planning.result import REFINING, Plan, PlannedPath
-from planner.planning.scoring import FAMILIES, InformationScores
+from planner.planning.result import Plan, PlannedPath
 from planner.planning.strategies import Ranking, rank_candidates
 from planner.recognition.session import Session
 from planner.types import (
@@ -56,12 +57,6 @@ FORECAST_SHARE = 0.25
 #: Below this probability of changing the hypotheses (for the outcome model) the
 #: best path is weak, and the recognition's predictions rank the candidates.
 _WEAK = 0.05
-#: Smallest share of the expected error disk a refining path must remove.
-_REFINE_GAIN = 0.01
-
-#: A refining touch the outcome model expects to leave more than this share of
-#: the error disk is weak: the recognition's predictions are asked as well.
-_WEAK_REFINEMENT = 0.5
 
 
 def plan_session(
@@ -176,7 +171,7 @@ def plan(
         budget=budget,
     )
     if classes == 1:  # one class, its bound short of the required accuracy
-        paths, note = _one_class(
+        paths, note = one_class_paths(
             found, hypotheses, models, contacts, sensor, config, session, budget
         )
         return finish("ambiguous", paths, truncated=found.truncated, note=note, classes=1)
@@ -190,7 +185,7 @@ def plan(
         rng=gen,
         budget=budget,
     )
-    paths = [_planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
+    paths = [planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
     paths, note = _unless_weak(found, session, ranking, config, budget, paths)
     if not paths:
         paths, note = _uninformative(
@@ -244,7 +239,7 @@ def _uninformative(
     takes its best window, as the thesis did; the other strategies rank on the
     recognition's predictions (given a session), then refine."""
     if config.name == "thesis":
-        paths, note = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+        paths, note = refining_paths(found, hypotheses, models, contacts, sensor, ranking, config)
         if not paths:
             paths, note = _thesis_window(found, ranking, config, rng, note)
         return paths, note
@@ -253,7 +248,9 @@ def _uninformative(
         paths, note = _by_recognition(found, session, ranking, config, budget)
     if not paths:
         # the recognition's note says why nothing changes the classes; keep it
-        paths, refined = _refining(found, hypotheses, models, contacts, sensor, ranking, config)
+        paths, refined = refining_paths(
+            found, hypotheses, models, contacts, sensor, ranking, config
+        )
         note = refined if paths else note
     return paths, note
 
@@ -275,164 +272,7 @@ def _thesis_window(
         tier = found.candidates.tier[windows]
         windows = rng.permutation(windows[tier == tier.min()])
     said = "the thesis' best window, though not informative"
-    return [_planned(found, int(windows[0]), ranking)], "; ".join(filter(None, [note, said]))
-
-
-def _refining(
-    found: Analysis,
-    hypotheses: Sequence[Hypothesis],
-    models: Mapping[str, ObjectModel],
-    contacts: Sequence[Contact],
-    sensor: SensorBounds,
-    ranking: Ranking,
-    config: StrategyConfig,
-) -> tuple[list[PlannedPath], str | None]:
-    """No informative path: the paths that shrink the expected error disk most
-    (at least by `_REFINE_GAIN` of it), with a note saying so. Their scores are
-    those of the outcome model with the disks each class is predicted to have
-    once the touch is made (with today's disks every outcome is confusable)."""
-    refine = refinement(hypotheses, models, found.posed, found.outcomes, contacts, sensor)
-    gain = refine.current - refine.expected
-    # refining paths at the default height: their scores are worked out on its outlines
-    default = np.isnan(found.candidates.height)  # type: ignore[arg-type]
-    ok = np.flatnonzero((gain > _REFINE_GAIN * refine.current) & default)
-    if not len(ok):
-        return [], ranking.note
-    order = ok[np.lexsort((found.motion[ok], refine.expected[ok]))][: config.max_paths]
-    paths = []
-    for i in order:
-        info = scores_after(
-            hypotheses, found.posed, refine, found.candidates, int(i), sensor, config.outcome
-        )
-        paths.append(
-            _planned(
-                found,
-                int(i),
-                ranking,
-                family=REFINING,
-                expected_eps_t=refine.expected[i],
-                scores=(info, 0),
-            )
-        )
-    note = (
-        f"{ranking.note or 'one class left, its bound short of the required accuracy'}: "
-        "refining the pose instead "
-        f"(expected error disk {refine.current:.3g} -> {refine.expected[order[0]]:.3g})"
-    )
-    return paths, note
-
-
-def _one_class(
-    found: Analysis,
-    hypotheses: Sequence[Hypothesis],
-    models: Mapping[str, ObjectModel] | Sequence[ObjectModel],
-    contacts: Sequence[Contact],
-    sensor: SensorBounds,
-    config: StrategyConfig,
-    session: Session | None,
-    budget: Budget,
-) -> tuple[list[PlannedPath], str]:
-    """One class left, its bound short of the accuracy: the paths sure to shrink it by
-    the outcome model, or (given the session) those the recognition predicts do."""
-    by_name = models_by_name(models)
-    paths, note = _refining(
-        found, hypotheses, by_name, contacts, sensor, _no_ranking(found), config
-    )
-    current = max(h.error_bound.eps_t for h in hypotheses)
-    weak = not paths or _eps_t(paths[0]) > _WEAK_REFINEMENT * current
-    if weak and session is not None:
-        # the outcome model credits few contacts near other faces: ask the recognition
-        judged, judged_note = _refining_by_recognition(found, session, config, budget)
-        if judged and (not paths or _eps_t(judged[0]) < _eps_t(paths[0])):
-            paths, note = judged, judged_note
-        elif not paths:
-            note = judged_note
-    return paths, note or "one class left; no path shrinks its bound further"
-
-
-def _eps_t(path: PlannedPath) -> float:
-    return math.inf if path.expected_eps_t is None else path.expected_eps_t
-
-
-def _refining_by_recognition(
-    found: Analysis, session: Session, config: StrategyConfig, budget: Budget
-) -> tuple[list[PlannedPath], str | None]:
-    """One class left, short of the accuracy, and no refining touch sure for the
-    outcome model: the paths after which the recognition predicts the smaller
-    bound (:func:`~planner.planning.forecast.recognition_refining`), those that
-    shrink it by at least `_REFINE_GAIN`, best first."""
-    judged = recognition_refining(session, found, budget)
-    now_t, now_r = judged.current
-    useful = (judged.translation < (1 - _REFINE_GAIN) * now_t) | (
-        judged.rotation < (1 - _REFINE_GAIN) * now_r
-    )
-    ranking = _no_ranking(found)
-    paths = [
-        dataclasses.replace(
-            _planned(found, int(i), ranking, family=REFINING, expected_eps_t=float(e)),
-            scored_by="recognition",
-        )
-        for i, e in zip(judged.rows[useful], judged.eps_t[useful], strict=True)
-    ][: config.max_paths]
-    if not paths and not len(judged.rows) and len(judged.pinning):
-        # no prediction it could judge (a loosely pinned class' nominal pose, a fit, lies
-        # off its contacts): the paths whose contact would pin the pose most, not none
-        pinning = judged.pinning[: config.max_paths]
-        paths = [_planned(found, int(i), ranking, family=REFINING) for i in pinning]
-        return paths, (
-            "one class left, its bound short of the required accuracy: the recognition "
-            "could not judge its predicted contacts (they contradict the contacts so "
-            "far); refining where a contact would pin the pose most"
-        )
-    if not paths:
-        return [], (
-            "one class left, its bound short of the required accuracy; no path shrinks its "
-            "bound further: the recognition predicts no smaller bound after any of the "
-            f"{len(judged.rows)} paths it judged"
-        )
-    first = np.flatnonzero(useful)[0]
-    note = (
-        "one class left, its bound short of the required accuracy: refining the pose "
-        "on the recognition's predictions (translation bound "
-        f"{now_t:.3g} -> {judged.translation[first]:.3g}, rotation "
-        f"{now_r:.3g} -> {judged.rotation[first]:.3g})"
-    )
-    return paths, note
-
-
-def _planned(
-    found: Analysis,
-    i: int,
-    ranking: Ranking,
-    family: str | None = None,
-    expected_eps_t: float | None = None,
-    scores: tuple[InformationScores, int] | None = None,
-) -> PlannedPath:
-    """Candidate `i` as a planned path; `scores` (information scores, row) replace
-    the analysis' own for that path."""
-    c = found.candidates
-    info, j = scores if scores is not None else (found.info, i)
-    return PlannedPath(
-        origin=(float(c.origins[i, 0]), float(c.origins[i, 1])),
-        direction=(float(c.directions[i, 0]), float(c.directions[i, 1])),
-        length=float(c.lengths[i]),
-        aim=(float(c.aims[i, 0]), float(c.aims[i, 1])),
-        family=family or FAMILIES[int(info.family[j])],
-        p_distinguishing=float(info.p_distinguishing[j]),
-        p_informative=float(info.p_informative[j]),
-        expected_pruning=float(info.expected_pruning[j]),
-        expected_remaining=float(ranking.expected_remaining[i]),
-        motion_cost=float(found.motion[i]),
-        source=str(c.source[i]),
-        expected_eps_t=None if expected_eps_t is None else float(expected_eps_t),
-        height=c.height_of(i),
-    )
-
-
-def _no_ranking(found: Analysis) -> Ranking:
-    """The ranking of a single class: nothing to tell apart, no touch left to count."""
-    n = len(found.candidates)
-    return Ranking(np.zeros(0, dtype=int), np.ones(n), np.ones(n, dtype=bool), False, None)
+    return [planned(found, int(windows[0]), ranking)], "; ".join(filter(None, [note, said]))
 
 
 def _unless_weak(
@@ -477,7 +317,7 @@ def _by_recognition(
     # the recognition's P(DM) is the forecast of the first `config.forecast` paths
     paths = [
         dataclasses.replace(
-            _planned(found, int(i), ranking, family="partial"),
+            planned(found, int(i), ranking, family="partial"),
             p_forecast=float(p) if k < config.forecast else None,
             scored_by="recognition",
         )
