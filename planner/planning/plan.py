@@ -57,6 +57,11 @@ FORECAST_SHARE = 0.25
 #: Below this probability of changing the hypotheses (for the outcome model) the
 #: best path is weak, and the recognition's predictions rank the candidates.
 _WEAK = 0.05
+#: Strategies that rank on the recognition's predictions whenever these find a path
+#: that changes the classes, not only when the outcome model's best path is weak:
+#: the worst-case model calls too much confusable near small features and on drawn
+#: curves (measured: README, "Beside the published strategies").
+PREDICTED_FIRST = ("lookahead",)
 
 
 def plan_session(
@@ -284,15 +289,20 @@ def _unless_weak(
     paths: list[PlannedPath],
 ) -> tuple[list[PlannedPath], str | None]:
     """The ranked `paths`, unless the best changes the hypotheses with probability
-    under `_WEAK` for the outcome model: then (given the session) those the
-    recognition predicts change them, when it finds any. ``thesis`` and ``random``
-    keep their own choice."""
+    under `_WEAK` for the outcome model, or the strategy is one of
+    `PREDICTED_FIRST`: then (given the session) those the recognition predicts
+    change them, when it finds any. ``thesis`` and ``random`` keep their own
+    choice."""
     if not paths or session is None or config.name in ("thesis", "random"):
         return paths, ranking.note
     p_inf = float(found.info.p_informative[ranking.order[0]])
-    if p_inf >= _WEAK:
+    if p_inf >= _WEAK and config.name not in PREDICTED_FIRST:
         return paths, ranking.note
-    why = f"the outcome model's best path changes the hypotheses with probability {p_inf:.2g}"
+    why = (
+        f"the outcome model's best path changes the hypotheses with probability {p_inf:.2g}"
+        if p_inf < _WEAK
+        else f"{config.name} ranks on the recognition's predictions first"
+    )
     judged, said = _by_recognition(found, session, ranking, config, budget, why)
     if not judged:
         return paths, ranking.note

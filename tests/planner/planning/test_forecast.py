@@ -137,12 +137,13 @@ def test_a_weak_best_path_gives_way_to_the_recognitions_ranking(monkeypatch):
     """When the outcome model's best path would change the hypotheses only rarely
     (under the weak share, raised here so that the ellipse after two contacts,
     where the best changes them with probability 0.28, counts as weak), the plan
-    ranks the candidates on the recognition's predictions instead and says so."""
+    ranks the candidates on the recognition's predictions instead and says so
+    (``pdm``: it ranks on the outcome model otherwise)."""
     from planner.planning import plan as plan_module
 
     session = _ellipse_touched(3)
     now = len({h.equivalence_class for h in session.hypotheses})
-    config = StrategyConfig(budget_ms=None)
+    config = StrategyConfig(name="pdm", budget_ms=None)
     assert plan_session(session, (174.08, -98.46), config, 0).paths[0].scored_by == (
         "outcome_model"
     )
@@ -150,6 +151,21 @@ def test_a_weak_best_path_gives_way_to_the_recognitions_ranking(monkeypatch):
     found = plan_session(session, (174.08, -98.46), config, 0)
     assert found.paths and found.paths[0].scored_by == "recognition"
     assert "changes the hypotheses with probability" in (found.note or "")
+    expected = float(found.note.split(f"classes {now} -> ")[1].split(" expected")[0])
+    assert expected < now
+
+
+def test_lookahead_ranks_on_the_recognitions_predictions_first():
+    """``lookahead`` takes the recognition's ranking whenever it finds a path that
+    changes the classes, also where the outcome model's best path is not weak (the
+    ellipse after two contacts: it changes the hypotheses with probability 0.28);
+    the note says which ranking was taken."""
+    session = _ellipse_touched(3)
+    now = len({h.equivalence_class for h in session.hypotheses})
+    found = plan_session(session, (174.08, -98.46), StrategyConfig(budget_ms=None), 0)
+    assert found.strategy == "lookahead"
+    assert found.paths and found.paths[0].scored_by == "recognition"
+    assert "lookahead ranks on the recognition's predictions first" in (found.note or "")
     expected = float(found.note.split(f"classes {now} -> ")[1].split(" expected")[0])
     assert expected < now
 
