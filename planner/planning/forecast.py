@@ -26,7 +26,7 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Iterator
+from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from contextvars import ContextVar
 from dataclasses import dataclass
@@ -153,7 +153,10 @@ class RecognitionRanking:
 
 
 def recognition_ranking(
-    session: Session, found: Analysis, budget: Budget | None = None
+    session: Session,
+    found: Analysis,
+    budget: Budget | None = None,
+    first: Sequence[int] = (),
 ) -> RecognitionRanking:
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
@@ -165,7 +168,8 @@ def recognition_ranking(
     classes left are counted. ``E[classes] = sum_k w(k) classes(after k's
     outcome)``. The first path is always judged, the rest while the `budget`
     allows: `SHORTLIST` of them, and past that (up to `SHORTLIST_ROUNDS` times as
-    many) while none is predicted to change the classes."""
+    many) while none is predicted to change the classes. Candidates `first` are
+    judged before the shortlist."""
     budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
@@ -184,6 +188,9 @@ def recognition_ranking(
     keep = np.arange(len(shortlist)) < SHORTLIST
     keep[len(feature) :] |= apart > 1.0
     shortlist = shortlist[keep][: SHORTLIST * SHORTLIST_ROUNDS]
+    if len(first):
+        first = np.asarray(first, dtype=int)
+        shortlist = np.concatenate([first, shortlist[~np.isin(shortlist, first)]])
     rows, p_dm, expected = [], [], []
     size = update_size(session)
     for c in shortlist:

@@ -29,6 +29,7 @@ from planner.planning.analysis import Analysis, analyse, as_generator, models_by
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import (
+    RecognitionRanking,
     predictions,
     recognition_ranking,
     with_forecast,
@@ -57,10 +58,11 @@ FORECAST_SHARE = 0.25
 #: Below this probability of changing the hypotheses (for the outcome model) the
 #: best path is weak, and the recognition's predictions rank the candidates.
 _WEAK = 0.05
-#: Strategies that rank on the recognition's predictions whenever these find a path
-#: that changes the classes, not only when the outcome model's best path is weak:
-#: the worst-case model calls too much confusable near small features and on drawn
-#: curves (measured: README, "Beside the published strategies").
+#: Strategies that take the recognition's ranking also when its predictions say its
+#: best path does better than the outcome model's, not only when the outcome
+#: model's best path is weak: the worst-case model calls too much confusable near
+#: small features and on drawn curves (measured: README, "Beside the published
+#: strategies").
 PREDICTED_FIRST = ("lookahead",)
 
 
@@ -289,24 +291,58 @@ def _unless_weak(
     paths: list[PlannedPath],
 ) -> tuple[list[PlannedPath], str | None]:
     """The ranked `paths`, unless the best changes the hypotheses with probability
-    under `_WEAK` for the outcome model, or the strategy is one of
-    `PREDICTED_FIRST`: then (given the session) those the recognition predicts
-    change them, when it finds any. ``thesis`` and ``random`` keep their own
-    choice."""
+    under `_WEAK` for the outcome model: then (given the session) those the
+    recognition predicts change them, when it finds any. Strategies of
+    `PREDICTED_FIRST` also take the recognition's ranking when it predicts its
+    best path does better than the outcome model's. ``thesis`` and ``random``
+    keep their own choice."""
     if not paths or session is None or config.name in ("thesis", "random"):
         return paths, ranking.note
     p_inf = float(found.info.p_informative[ranking.order[0]])
-    if p_inf >= _WEAK and config.name not in PREDICTED_FIRST:
+    if p_inf >= _WEAK:
+        if config.name in PREDICTED_FIRST:
+            return _unless_predicted_better(found, session, ranking, config, budget, paths)
         return paths, ranking.note
-    why = (
-        f"the outcome model's best path changes the hypotheses with probability {p_inf:.2g}"
-        if p_inf < _WEAK
-        else f"{config.name} ranks on the recognition's predictions first"
-    )
+    why = f"the outcome model's best path changes the hypotheses with probability {p_inf:.2g}"
     judged, said = _by_recognition(found, session, ranking, config, budget, why)
     if not judged:
         return paths, ranking.note
     return judged, "; ".join(filter(None, [said, ranking.note]))
+
+
+def _unless_predicted_better(
+    found: Analysis,
+    session: Session,
+    ranking: Ranking,
+    config: StrategyConfig,
+    budget: Budget,
+    paths: list[PlannedPath],
+) -> tuple[list[PlannedPath], str | None]:
+    """The outcome model's ranked `paths`, unless the model is unsure of some
+    outcome of its best path and the recognition, judging that path before its
+    shortlist, predicts a path of the shortlist does better: a larger P(DM), or
+    as large and fewer classes expected. Where the model is sure of every outcome
+    (exact sensing, mostly) it is the recognition's nominal prediction looked at
+    two touches deep, and its ranking stands."""
+    best = int(ranking.order[0])
+    if not found.outcomes.uncertain[best].any():
+        return paths, ranking.note  # the model is sure of every outcome: it stands
+    judged = recognition_ranking(session, found, budget, first=[best])
+    at = np.flatnonzero(judged.rows == best)
+    if not len(at) or judged.rows[0] == best:
+        return paths, ranking.note
+    p_best, e_best = judged.p_distinguishing[at[0]], judged.expected_classes[at[0]]
+    p_top, e_top = judged.p_distinguishing[0], judged.expected_classes[0]
+    better = p_top > p_best + 1e-9 or (p_top > p_best - 1e-9 and e_top < e_best - 1e-9)
+    if not better:
+        return paths, ranking.note
+    why = (
+        "the recognition predicts a better path than the outcome model's best "
+        f"(P(DM) {p_best:.2f}, classes {judged.current} -> {e_best:.2f} expected)"
+    )
+    return _recognition_paths(found, judged, ranking, config), "; ".join(
+        filter(None, [_ranked_note(why, judged), ranking.note])
+    )
 
 
 def _by_recognition(
@@ -323,9 +359,23 @@ def _by_recognition(
     then expected classes left), scored by the recognition."""
     why = why or ranking.note
     judged = recognition_ranking(session, found, budget)
+    paths = _recognition_paths(found, judged, ranking, config)
+    if not paths:
+        note = (
+            f"{why}; the recognition predicts {judged.current} classes after each "
+            f"of the {len(judged.rows)} paths it judged"
+        )
+        return [], note
+    return paths, _ranked_note(why, judged)
+
+
+def _recognition_paths(
+    found: Analysis, judged: RecognitionRanking, ranking: Ranking, config: StrategyConfig
+) -> list[PlannedPath]:
+    """The judged paths predicted to leave fewer classes, best first, scored by the
+    recognition (its P(DM) is the forecast of the first `config.forecast`)."""
     useful = judged.expected_classes < judged.current - 1e-9
-    # the recognition's P(DM) is the forecast of the first `config.forecast` paths
-    paths = [
+    return [
         dataclasses.replace(
             planned(found, int(i), ranking, family="partial"),
             p_forecast=float(p) if k < config.forecast else None,
@@ -335,15 +385,12 @@ def _by_recognition(
             zip(judged.rows[useful], judged.p_distinguishing[useful], strict=True)
         )
     ][: config.max_paths]
-    if not paths:
-        note = (
-            f"{why}; the recognition predicts {judged.current} classes after each "
-            f"of the {len(judged.rows)} paths it judged"
-        )
-        return [], note
-    note = (
+
+
+def _ranked_note(why: str | None, judged: RecognitionRanking) -> str:
+    useful = judged.expected_classes < judged.current - 1e-9
+    return (
         f"{why}: ranked on the recognition's predictions (classes "
         f"{judged.current} -> {judged.expected_classes[useful][0]:.2f} expected, "
         f"P(DM) {judged.p_distinguishing[useful][0]:.2f})"
     )
-    return paths, note

@@ -155,19 +155,73 @@ def test_a_weak_best_path_gives_way_to_the_recognitions_ranking(monkeypatch):
     assert expected < now
 
 
-def test_lookahead_ranks_on_the_recognitions_predictions_first():
-    """``lookahead`` takes the recognition's ranking whenever it finds a path that
-    changes the classes, also where the outcome model's best path is not weak (the
-    ellipse after two contacts: it changes the hypotheses with probability 0.28);
-    the note says which ranking was taken."""
-    session = _ellipse_touched(3)
-    now = len({h.equivalence_class for h in session.hypotheses})
-    found = plan_session(session, (174.08, -98.46), StrategyConfig(budget_ms=None), 0)
-    assert found.strategy == "lookahead"
+def _curved_touched() -> Session:
+    """A world of the shared curved set (no part over 500 vertices) at the 5 degree
+    sensor after three contacts (a simulated trial): 7 classes, where the outcome
+    model's best path is predicted by the recognition to leave 4 of them and
+    another path to leave one."""
+    from planner.types import Contact, Observation, Workspace
+
+    models = [m for m in object_set("curved") if len(m.stable_poses[0].outline) <= 500]
+    session = Session(models, SensorBounds(1.0, math.radians(5)), Workspace((0, 0), 200))
+    taken = [
+        (
+            (200.0, 0.0), (-1.0, 0.0), 400.0,
+            ((-24.6547468, 0.0723040), (0.9984610, 0.0554585)),
+        ),
+        (
+            (-200.0, 0.0), (0.9999018, 0.0140146), 173.8832532,
+            ((-96.4238150, 1.4408396), (-0.8893482, 0.4572304)),
+        ),
+        (
+            (141.4213562, 141.4213562), (-0.8146460, -0.5799585), 281.4440310,
+            ((-30.3080637, 19.2767093), (0.8576426, 0.5142462)),
+        ),
+    ]  # fmt: skip
+    for origin, direction, length, contact in taken:
+        session = session.observe(
+            Observation(SensingPath(origin, direction, length), Contact(*contact))
+        )
+    return session
+
+
+def test_lookahead_takes_the_recognitions_ranking_when_it_predicts_better(monkeypatch):
+    """``lookahead`` judges the outcome model's best path with the recognition
+    before the shortlist, and takes the recognition's ranking when it predicts a
+    path that does better (here P(DM) 0 -> 0.99); without that rule (or as
+    ``pdm``) the outcome model's ranking stands."""
+    session = _curved_touched()
+    where = (141.42, 141.42)
+    config = StrategyConfig(budget_ms=None)
+    found = plan_session(session, where, config, 0)
     assert found.paths and found.paths[0].scored_by == "recognition"
-    assert "lookahead ranks on the recognition's predictions first" in (found.note or "")
-    expected = float(found.note.split(f"classes {now} -> ")[1].split(" expected")[0])
-    assert expected < now
+    note = found.note or ""
+    assert "predicts a better path than the outcome model's best" in note
+    p_model = float(note.split("(P(DM) ")[1].split(",")[0])
+    assert found.paths[0].p_forecast is not None and found.paths[0].p_forecast > p_model
+    monkeypatch.setattr(plan_module, "PREDICTED_FIRST", ())
+    plain = plan_session(session, where, config, 0)
+    assert plain.paths[0].scored_by == "outcome_model"
+    assert plain.paths[0].path != found.paths[0].path
+
+
+def test_where_the_outcome_model_is_sure_its_ranking_stands(monkeypatch):
+    """The same scene, with the outcome model made sure of every outcome: its best
+    path is the recognition's nominal prediction looked at two touches deep, so
+    ``lookahead`` keeps it and the recognition is not asked."""
+    from planner.planning import forecast
+    from planner.planning.outcomes import Outcomes
+
+    session = _curved_touched()
+    asked = []
+    judge = forecast.recognition_ranking
+    monkeypatch.setattr(
+        plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
+    )
+    monkeypatch.setattr(Outcomes, "uncertain", property(lambda o: np.zeros(o.hit.shape, bool)))
+    found = plan_session(session, (141.42, 141.42), StrategyConfig(budget_ms=None), 0)
+    assert found.paths and found.paths[0].scored_by == "outcome_model"
+    assert not asked
 
 
 def test_outcomes_apart_measures_in_error_bounds():
