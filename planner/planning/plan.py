@@ -327,6 +327,8 @@ def _unless_predicted_better(
     best = int(ranking.order[0])
     if not found.outcomes.uncertain[best].any():
         return paths, ranking.note  # the model is sure of every outcome: it stands
+    if budget.exhausted():
+        return paths, ranking.note  # only the best path would be judged: no other to take
     judged = recognition_ranking(session, found, budget, first=[best])
     at = np.flatnonzero(judged.rows == best)
     if not len(at) or judged.rows[0] == best:

@@ -205,6 +205,29 @@ def test_lookahead_takes_the_recognitions_ranking_when_it_predicts_better(monkey
     assert plain.paths[0].path != found.paths[0].path
 
 
+def test_a_plan_whose_budget_is_spent_does_not_ask_the_recognition(monkeypatch):
+    """The scene where the recognition's ranking is taken, with the work spent by
+    the search: only the outcome model's best path could still be judged, so
+    nothing could replace it, and the recognition is not asked."""
+    session = _curved_touched()
+    asked = []
+    judge, rank = plan_module.recognition_ranking, plan_module.rank_candidates
+
+    def spent(*args, **kwargs):
+        ranking = rank(*args, **kwargs)
+        kwargs["budget"].spend("recognition_update", 1e9)
+        return ranking
+
+    monkeypatch.setattr(plan_module, "rank_candidates", spent)
+    monkeypatch.setattr(
+        plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
+    )
+    found = plan_session(session, (141.42, 141.42), StrategyConfig(budget_ms=None), 0)
+    assert found.paths and found.paths[0].scored_by == "outcome_model"
+    assert found.stopped_by == "work"
+    assert not asked
+
+
 def test_where_the_outcome_model_is_sure_its_ranking_stands(monkeypatch):
     """The same scene, with the outcome model made sure of every outcome: its best
     path is the recognition's nominal prediction looked at two touches deep, so
