@@ -390,6 +390,7 @@ def _recognition_paths(
 
 
 def _ranked_note(why: str | None, judged: RecognitionRanking) -> str:
+    """Why the recognition ranked the paths, and what it predicts of the first."""
     useful = judged.expected_classes < judged.current - 1e-9
     return (
         f"{why}: ranked on the recognition's predictions (classes "
