@@ -189,8 +189,8 @@ def recognition_ranking(
     keep[len(feature) :] |= apart > 1.0
     shortlist = shortlist[keep][: SHORTLIST * SHORTLIST_ROUNDS]
     if len(first):
-        first = np.asarray(first, dtype=int)
-        shortlist = np.concatenate([first, shortlist[~np.isin(shortlist, first)]])
+        ahead = np.asarray(first, dtype=int)
+        shortlist = np.concatenate([ahead, shortlist[~np.isin(shortlist, ahead)]])
     rows, p_dm, expected = [], [], []
     size = update_size(session)
     for c in shortlist:

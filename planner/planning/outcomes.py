@@ -133,15 +133,15 @@ class Outcomes:
     @property
     def uncertain(self) -> np.ndarray:
         """(C, H) bool: the outcome may be something other than the nominal one."""
-        return (
-            self.vertex
-            | self.grazing
-            | self.near_miss
-            | self.end_of_path
-            | self.shallow
-            | self.close_pass
-            | self.stretch
-        )
+        return self.uncertain_on(slice(None))
+
+    def uncertain_on(self, paths: int | slice | np.ndarray) -> np.ndarray:
+        """:attr:`uncertain` of the paths `paths` only (rows of the flags)."""
+        flags = ("vertex", "grazing", "near_miss", "end_of_path", "shallow", "close_pass")
+        out = self.stretch[paths].copy()
+        for name in flags:
+            out |= getattr(self, name)[paths]
+        return out
 
 
 def _tolerances(posed: PosedSet, sensor: SensorBounds, config: OutcomeConfig) -> dict:

@@ -325,16 +325,17 @@ def _unless_predicted_better(
     (exact sensing, mostly) it is the recognition's nominal prediction looked at
     two touches deep, and its ranking stands."""
     best = int(ranking.order[0])
-    if not found.outcomes.uncertain[best].any():
+    if not found.outcomes.uncertain_on(best).any():
         return paths, ranking.note  # the model is sure of every outcome: it stands
     if budget.exhausted():
         return paths, ranking.note  # only the best path would be judged: no other to take
     judged = recognition_ranking(session, found, budget, first=[best])
-    at = np.flatnonzero(judged.rows == best)
-    if not len(at) or judged.rows[0] == best:
+    if judged.rows[0] == best:  # judged first, it stays first on a tie
         return paths, ranking.note
-    p_best, e_best = judged.p_distinguishing[at[0]], judged.expected_classes[at[0]]
+    at = int(np.flatnonzero(judged.rows == best)[0])  # the first path is always judged
+    p_best, e_best = judged.p_distinguishing[at], judged.expected_classes[at]
     p_top, e_top = judged.p_distinguishing[0], judged.expected_classes[0]
+    # ahead by more than rounding, not by the last bits of a weighted sum
     better = p_top > p_best + 1e-9 or (p_top > p_best - 1e-9 and e_top < e_best - 1e-9)
     if not better:
         return paths, ranking.note

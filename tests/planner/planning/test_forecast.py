@@ -241,7 +241,7 @@ def test_where_the_outcome_model_is_sure_its_ranking_stands(monkeypatch):
     monkeypatch.setattr(
         plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
     )
-    monkeypatch.setattr(Outcomes, "uncertain", property(lambda o: np.zeros(o.hit.shape, bool)))
+    monkeypatch.setattr(Outcomes, "uncertain_on", lambda o, rows: np.zeros_like(o.hit[rows]))
     found = plan_session(session, (141.42, 141.42), StrategyConfig(budget_ms=None), 0)
     assert found.paths and found.paths[0].scored_by == "outcome_model"
     assert not asked
