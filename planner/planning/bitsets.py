@@ -27,7 +27,6 @@ __all__ = [
     "SurvivorTable",
     "close_ends",
     "compact",
-    "inseparable_neighbours",
     "n_words",
     "one_hot",
     "pack_bits",
@@ -392,20 +391,3 @@ def undominated(bits: np.ndarray) -> np.ndarray:
         within[lo : lo + step] = ~np.any(rows[lo : lo + step, None] & ~rows[None], axis=-1)
     np.fill_diagonal(within, False)
     return first[~within.any(axis=0)]
-
-
-def inseparable_neighbours(together: np.ndarray) -> tuple[np.ndarray | None, np.ndarray | None]:
-    """For each class, its inseparable classes `near` (K, G) (-1 = padding) and, as
-    G-bit masks over that list, which of them are separable from each (K, G);
-    (None, None) when some class has more than 64 inseparable classes."""
-    size = together.sum(axis=1)
-    width = int(size.max(initial=1))
-    if width > 64:
-        return None, None
-    order = np.argsort(~together, axis=1, kind="stable")[:, :width]
-    ok = np.take_along_axis(together, order, axis=1)
-    near = np.where(ok, order, -1)
-    at = np.maximum(near, 0)
-    apart = ~together[at[:, :, None], at[:, None, :]] & ok[:, :, None] & ok[:, None, :]
-    bit = np.left_shift(np.uint64(1), np.arange(width, dtype=np.uint64))
-    return near, np.bitwise_or.reduce(np.where(apart, bit, np.uint64(0)), axis=2)

@@ -16,7 +16,7 @@ import numpy as np
 
 from planner.compiled import c_array
 
-__all__ = ["one_touch_values"]
+__all__ = ["cliques", "one_touch_values"]
 
 _M1 = np.uint64(0x5555555555555555)
 _M2 = np.uint64(0x3333333333333333)
@@ -42,42 +42,60 @@ def _common(a, b):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _clique(group, near, near_apart):  # type: ignore[no-untyped-def]
-    """Are the classes of `group` (W,) among a class' inseparable neighbours `near`
-    (G,) pairwise inseparable? `near_apart` (G,): G-bit masks of which neighbours
-    are separable from each."""
-    local = np.uint64(0)
-    for q in range(near.shape[0]):
-        nb = near[q]
-        if nb >= 0 and (group[nb // 64] >> np.uint64(nb % 64)) & np.uint64(1):
-            local |= np.uint64(1) << np.uint64(q)
-    for q in range(near.shape[0]):
-        if (local >> np.uint64(q)) & np.uint64(1) and (near_apart[q] & local) != 0:
-            return False
+def _clique(group, apart):  # type: ignore[no-untyped-def]
+    """Are the classes of `group` (W,) pairwise inseparable? `apart` (K, W): the
+    classes some path tells from each class."""
+    for k in range(group.shape[0]):
+        word = group[k]
+        for bit in range(64):
+            if word == 0:
+                break
+            if word & np.uint64(1):
+                for q in range(group.shape[0]):
+                    if group[q] & apart[k * 64 + bit, q]:
+                        return False
+            word >>= np.uint64(1)
     return True
 
 
 @numba.njit(cache=True, nogil=True)
-def _values(rows, sets, idx, w, inseparable, near, near_apart, size, clique, rate, out):  # type: ignore[no-untyped-def]
-    """With `near` of shape (K, G) the groups and their cliques are found here, once
-    per member and only where a child's count asks; otherwise `size` and `clique`
-    (n, M) are given (or zero when no classes are inseparable)."""
+def _cliques(groups, apart, out):  # type: ignore[no-untyped-def]
+    for i in range(groups.shape[0]):
+        out[i] = _clique(groups[i], apart)
+
+
+def cliques(groups: np.ndarray, apart: np.ndarray) -> np.ndarray:
+    """(m,) bool: are the classes of each bitset in `groups` (m, W) pairwise
+    inseparable, `apart` (K, W) the classes some path tells from each class?
+
+    >>> apart = np.array([[2], [1], [0]], dtype=np.uint64)  # classes 0 and 1 apart
+    >>> cliques(np.array([[3], [5], [6], [7]], dtype=np.uint64), apart).tolist()
+    [False, True, True, False]
+    """
+    out = np.empty(len(groups), dtype=np.bool_)
+    _cliques(c_array(groups, dtype=np.uint64), c_array(apart, dtype=np.uint64), out)
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _values(rows, sets, idx, w, inseparable, apart, rate, out):  # type: ignore[no-untyped-def]
+    """The groups of inseparable classes and their cliques are found once per member
+    and only where a child's count asks (none when `inseparable` is empty)."""
     n, m_max = idx.shape
     n_paths, n_words = rows.shape[1], rows.shape[2]
-    lazy = near.shape[0] > 0
+    lazy = inseparable.shape[0] > 0
     group = np.zeros(n_words, dtype=np.uint64)
+    size = np.zeros(m_max, dtype=np.int64)
+    clique = np.zeros(m_max, dtype=np.bool_)
     for b in range(n):
         members = 0
         for m in range(m_max):
-            if idx[b, m] >= 0:
+            g = idx[b, m]
+            if g >= 0:
                 members += 1
-        if lazy:
-            for m in range(m_max):
-                g = idx[b, m]
-                if g < 0:
-                    continue
-                size[b, m] = _common(inseparable[g], sets[b])
-                clique[b, m] = False
+                # without inseparable classes 0: never an open child's count (>= 2)
+                size[m] = _common(inseparable[g], sets[b]) if lazy else 0
+                clique[m] = False
         known = np.zeros(m_max, dtype=np.bool_)
         best = math.inf
         for c in range(n_paths):
@@ -93,13 +111,13 @@ def _values(rows, sets, idx, w, inseparable, near, near_apart, size, clique, rat
                     continue
                 if count <= 1:
                     continue  # settled
-                if count == size[b, m]:
-                    if lazy and not known[m]:
+                if count == size[m]:
+                    if not known[m]:
                         for k in range(n_words):
                             group[k] = inseparable[g, k] & sets[b, k]
-                        clique[b, m] = _clique(group, near[g], near_apart[g])
+                        clique[m] = _clique(group, apart)
                         known[m] = True
-                    if clique[b, m]:
+                    if clique[m]:
                         continue  # settled: exactly its pairwise inseparable group
                 if rate > 0:
                     w_open += w[b, m] * max(1.0, math.log(max(count, 1)) / rate)
@@ -118,42 +136,26 @@ def one_touch_values(
     idx: np.ndarray,
     w: np.ndarray,
     rate: float | None,
-    *,
     inseparable: np.ndarray | None = None,
-    near: np.ndarray | None = None,
-    near_apart: np.ndarray | None = None,
-    size: np.ndarray | None = None,
-    clique: np.ndarray | None = None,
 ) -> np.ndarray:
     """(n,) the best one-touch value of each set (n, W) with members idx (n, M) (-1:
     padding) weighing w (n, M): `rows` (K, C, W) the survivor sets of each class
     along each path; leaves are valued at ``max(1, log(count) / rate)`` (one touch
     when `rate` is None). A child ``S_P(h) & T`` is settled when it holds at most
-    one class, or exactly the classes inseparable from h (`inseparable` (K, W))
-    when those are pairwise inseparable: found from each class' inseparable
-    neighbours `near` and `near_apart` (:func:`~planner.planning.bitsets.inseparable_neighbours`),
-    or given per member as the group's `size` and whether it is a `clique` (n, M).
-    inf where no path is informative."""
+    one class, or exactly the classes `inseparable` (K, W) from h (None: each class
+    only from itself) when those are pairwise inseparable. inf where no path is
+    informative."""
     out = np.empty(len(sets))
-    n_words = sets.shape[-1]
-    if near is None or near_apart is None or inseparable is None:
-        near = np.zeros((0, 1), dtype=np.int64)
-        near_apart = np.zeros((0, 1), dtype=np.uint64)
-        inseparable = np.zeros((0, n_words), dtype=np.uint64)
-        size = np.zeros(idx.shape, dtype=np.int64) if size is None else size
-        clique = np.zeros(idx.shape, dtype=bool) if clique is None else clique
-    else:
-        size, clique = np.zeros(idx.shape, dtype=np.int64), np.zeros(idx.shape, dtype=bool)
+    if inseparable is None:
+        inseparable = np.zeros((0, sets.shape[-1]), dtype=np.uint64)
+    inseparable = c_array(inseparable, dtype=np.uint64)
     _values(
         c_array(rows, dtype=np.uint64),
         c_array(sets, dtype=np.uint64),
         c_array(idx, dtype=np.int64),
         c_array(w, dtype=np.float64),
-        c_array(inseparable, dtype=np.uint64),
-        c_array(near, dtype=np.int64),
-        c_array(near_apart, dtype=np.uint64),
-        c_array(size, dtype=np.int64),
-        c_array(clique, dtype=np.bool_),
+        inseparable,
+        ~inseparable,
         0.0 if rate is None else float(rate),
         out,
     )

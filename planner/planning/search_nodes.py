@@ -30,12 +30,11 @@ import numpy as np
 
 from planner.planning.bitsets import (
     SurvivorTable,
-    inseparable_neighbours,
     popcount,
     undominated,
     unpack_bits,
 )
-from planner.planning.leaf_kernel import one_touch_values
+from planner.planning.leaf_kernel import cliques, one_touch_values
 
 __all__ = ["Node", "SearchSpace"]
 
@@ -74,7 +73,6 @@ class SearchSpace:
         self.separable = ~unpack_bits(table.inseparable, self.n)
         self.apart = ~table.inseparable  # (K, W): classes some path tells from each class
         self.by_class = np.ascontiguousarray(np.swapaxes(self.bits, 0, 1))  # (K, C, W)
-        self.near, self.near_apart = inseparable_neighbours(~self.separable)
         self.any_inseparable = bool((~self.separable & ~np.eye(self.n, dtype=bool)).any())
         self.one_word = self.bits.shape[-1] == 1
         self.states = 0
@@ -111,7 +109,7 @@ class SearchSpace:
             return True
         if not self.any_inseparable or np.any(state & self.apart[idx[0]] != 0):
             return False
-        return bool(self._clique(state[None], idx[:1])[0])
+        return bool(cliques(state[None], self.apart)[0])
 
     def settled_many(self, sets: np.ndarray, idx: np.ndarray) -> np.ndarray:
         """(n,) bool: which sets (n, W) with members idx (n, M) no path can split."""
@@ -120,38 +118,16 @@ class SearchSpace:
             return single
         first = np.maximum(idx[:, 0], 0)
         inside = ~np.any(sets & self.apart[first] != 0, axis=-1) & ~single
-        return single | self._cliques(sets, first, np.where(inside, 2, 0))
+        return single | self._cliques(sets, np.where(inside, 2, 0))
 
-    def _cliques(self, group: np.ndarray, idx: np.ndarray, size: np.ndarray) -> np.ndarray:
-        """`_clique` of the groups (..., W) of classes idx (...) of `size` (...) two or
-        more; False for the others (a group of one is settled anyway)."""
-        out = np.zeros(idx.shape, dtype=bool)
+    def _cliques(self, group: np.ndarray, size: np.ndarray) -> np.ndarray:
+        """Are the classes of each group (..., W) pairwise inseparable? False where
+        its `size` (...) is under two (a group of one is settled anyway)."""
+        out = np.zeros(size.shape, dtype=bool)
         pick = np.nonzero(size >= 2)
         if len(pick[0]):
-            out[pick] = self._clique(group[pick], idx[pick])
+            out[pick] = cliques(group[pick], self.apart)
         return out
-
-    def _clique(self, group: np.ndarray, idx: np.ndarray) -> np.ndarray:
-        """(m,) bool: are the classes of each `group` (m, W), a subset of the classes
-        inseparable from idx[i], pairwise inseparable? Tested on each class's few
-        inseparable neighbours, as bit masks over them."""
-        if self.near is None or self.near_apart is None:  # too many neighbours for a word
-            member = unpack_bits(group, self.n).astype(np.float32)
-            # pairwise inseparable iff m^T A m == 0, A the separable pairs
-            return np.einsum("nj,nj->n", member @ self.separable.astype(np.float32), member) == 0
-        near, near_apart = self.near[idx], self.near_apart[idx]  # (m, G), (m, G)
-        at = np.maximum(near, 0)
-        word = np.take_along_axis(group, at // 64, axis=1)
-        inside = ((word >> (at % 64).astype(np.uint64)) & np.uint64(1)).astype(bool) & (near >= 0)
-        local = np.bitwise_or.reduce(
-            np.where(
-                inside,
-                np.left_shift(np.uint64(1), np.arange(near.shape[1], dtype=np.uint64)),
-                np.uint64(0),
-            ),
-            axis=1,
-        )
-        return ~np.any(inside & ((near_apart & local[:, None]) != 0), axis=1)
 
     def expand(self, state: np.ndarray, idx: np.ndarray, paths: Any = slice(None)) -> Node:
         """The node of state S (classes idx): its children over `paths` (default all)."""
@@ -177,7 +153,7 @@ class SearchSpace:
                 # when it holds no more (as many members) and those are pairwise inseparable
                 group = self.inseparable[idx] & state
                 size = popcount(group)
-                settled |= (count == size) & self._cliques(group, idx, size)
+                settled |= (count == size) & self._cliques(group, size)
             open_ = ~stay & ~settled
         w_stay = stay.astype(float) @ w
         informative = w_stay < 1 - 1e-12
@@ -205,15 +181,5 @@ class SearchSpace:
         w = np.where(total > 0, w / np.where(total > 0, total, 1.0), real / real.sum(1)[:, None])
         # a child holding exactly the classes inseparable from h is settled when they
         # are a clique (a group of one is settled by the count already)
-        rows = self.leaf_by_class
-        if not self.any_inseparable:
-            return one_touch_values(rows, sets, idx, w, self.rate)
-        if self.near is not None and self.near_apart is not None:
-            return one_touch_values(
-                rows, sets, idx, w, self.rate,
-                inseparable=self.inseparable, near=self.near, near_apart=self.near_apart,
-            )  # fmt: skip
-        group = self.inseparable[g] & sets[:, None, :]
-        size = popcount(group).astype(np.int64)
-        clique = self._cliques(group, g, size)
-        return one_touch_values(rows, sets, idx, w, self.rate, size=size, clique=clique)
+        inseparable = self.inseparable if self.any_inseparable else None
+        return one_touch_values(self.leaf_by_class, sets, idx, w, self.rate, inseparable)

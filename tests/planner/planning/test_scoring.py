@@ -8,7 +8,6 @@ from __future__ import annotations
 
 import itertools
 import math
-from unittest import mock
 
 import numpy as np
 import pytest
@@ -20,6 +19,7 @@ from planner.models.outlines import make_stable_pose
 from planner.planning.bitsets import SurvivorTable, pack_bits, undominated
 from planner.planning.budget import Budget
 from planner.planning.confusability import confusability, survivor_table
+from planner.planning.leaf_kernel import cliques
 from planner.planning.outcomes import predict_outcomes
 from planner.planning.peers import information_gain
 from planner.planning.posed_set import pose_hypotheses
@@ -414,24 +414,19 @@ def test_lookahead_agrees_with_plain_recursion(k, n_paths, seed):
         assert found.exact.all()
 
 
-@settings(max_examples=30, deadline=None)
-@given(st.integers(3, 12), st.integers(1, 6), st.integers(0, 2**31), st.booleans())
-def test_leaf_values_agree_however_the_cliques_are_found(k, n_paths, seed, entropy):
-    # the one-touch leaves find the inseparable groups' cliques from each class'
-    # neighbour list; past 64 neighbours they are given by array passes instead
+@settings(max_examples=40, deadline=None)
+@given(st.integers(2, 150), st.integers(1, 8), st.integers(0, 2**31))
+def test_cliques_agree_with_pairwise_checks(k, n_groups, seed):
+    # groups wider than one word of classes, and classes with more than 64
+    # inseparable neighbours, are checked alike
     rng = np.random.default_rng(seed)
-    conf = rng.random((n_paths, k, k)) < rng.uniform(0.1, 0.7)
-    conf[:, np.arange(k), np.arange(k)] = True
-    pairs = rng.integers(0, k, (rng.integers(1, 5), 2))
-    conf[:, pairs[:, 0], pairs[:, 1]] = True
-    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), rng.uniform(0.1, 1, k))
-    leaf = "entropy" if entropy else "touch"
-    lazy = expected_remaining(table, 2, leaf=leaf).value
-    with mock.patch(
-        "planner.planning.search_nodes.inseparable_neighbours", return_value=(None, None)
-    ):
-        given_cliques = expected_remaining(table, 2, leaf=leaf).value
-    np.testing.assert_array_equal(lazy, given_cliques)
+    together = rng.random((k, k)) < rng.uniform(0.5, 1.0)
+    together = together & together.T
+    np.fill_diagonal(together, True)
+    members = rng.random((n_groups, k)) < rng.uniform(0.02, 0.5)
+    expected = [not np.any(~together[np.ix_(m, m)]) for m in members]
+    found = cliques(pack_bits(members), ~pack_bits(together))
+    assert found.tolist() == expected
 
 
 @settings(max_examples=40, deadline=None)
