@@ -35,7 +35,6 @@ __all__ = [
     "sorted_count",
     "to_int",
     "transpose_bits",
-    "undominated",
     "unpack_bits",
     "weighted_count",
 ]
@@ -365,29 +364,3 @@ def close_ends(
     slot = at[r, order[r, p] - n]
     out[r[slot >= 0], slot[slot >= 0]] = True
     return out & member
-
-
-def undominated(bits: np.ndarray) -> np.ndarray:
-    """Indices of the paths (C, K, W) that no other path dominates, the first of
-    identical ones kept.
-
-    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h: whatever
-    the truth, Q leaves no more classes than Q' (:mod:`planner.planning.search_nodes` uses
-    it for one-touch values).
-
-    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
-    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
-    [1]
-    """
-    flat = np.asarray(bits, dtype=np.uint64).reshape(len(bits), -1)
-    # the first of each group of identical paths, then dominance among those
-    _, first = np.unique(flat, axis=0, return_index=True)
-    first = np.sort(first)
-    rows, n = flat[first], len(first)
-    # within[q, r]: S_q(h) within S_r(h) for every h
-    within = np.empty((n, n), dtype=bool)
-    step = max(1, 1_000_000 // max(1, n * flat.shape[1]))
-    for lo in range(0, n, step):
-        within[lo : lo + step] = ~np.any(rows[lo : lo + step, None] & ~rows[None], axis=-1)
-    np.fill_diagonal(within, False)
-    return first[~within.any(axis=0)]

@@ -4,7 +4,9 @@
 (a bitset of classes) by ``min_P (1 + sum_{open} w(h|T) leaf(|S_P(h) & T|)) /
 (1 - w(stay | T))`` over the undominated paths P. As array passes that is an
 (n, M, C, W) intersection, its popcount, and three (n, M, C) masks; here it is
-one pass that keeps only the running sums of one (set, path) at a time.
+one pass that keeps only the running sums of one (set, path) at a time. The paths
+it runs over are the undominated ones, and its settled sets are cliques of
+inseparable classes: both found here too, with early exits.
 """
 
 from __future__ import annotations
@@ -16,7 +18,7 @@ import numpy as np
 
 from planner.compiled import c_array
 
-__all__ = ["cliques", "one_touch_values"]
+__all__ = ["cliques", "one_touch_values", "undominated"]
 
 _M1 = np.uint64(0x5555555555555555)
 _M2 = np.uint64(0x3333333333333333)
@@ -160,3 +162,44 @@ def one_touch_values(
         out,
     )
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _dominated(rows, out):  # type: ignore[no-untyped-def]
+    """out[r]: some other row q of the distinct rows (n, L) lies within row r."""
+    n, width = rows.shape
+    for r in range(n):
+        for q in range(n):
+            if q == r:
+                continue
+            within = True
+            for k in range(width):
+                if rows[q, k] & ~rows[r, k]:
+                    within = False
+                    break
+            if within:
+                out[r] = True
+                break
+
+
+def undominated(bits: np.ndarray) -> np.ndarray:
+    """Indices of the paths (C, K, W) that no other path dominates, the first of
+    identical ones kept.
+
+    Path Q dominates Q' when S_Q(h) is within S_Q'(h) for every class h: whatever
+    the truth, Q leaves no more classes than Q' (:mod:`planner.planning.search_nodes` uses
+    it for one-touch values).
+
+    >>> from planner.planning.bitsets import pack_bits
+    >>> eye, full = np.eye(2, dtype=bool), np.ones((2, 2), dtype=bool)
+    >>> undominated(pack_bits(np.stack([full, eye, eye]))).tolist()
+    [1]
+    """
+    flat = c_array(np.asarray(bits).reshape(len(bits), -1), dtype=np.uint64)
+    first: dict[bytes, int] = {}
+    for i, row in enumerate(flat):
+        first.setdefault(row.tobytes(), i)
+    kept = np.fromiter(first.values(), dtype=np.intp, count=len(first))
+    dominated = np.zeros(len(kept), dtype=np.bool_)
+    _dominated(flat[kept], dominated)
+    return kept[~dominated]

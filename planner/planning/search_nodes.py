@@ -31,10 +31,9 @@ import numpy as np
 from planner.planning.bitsets import (
     SurvivorTable,
     popcount,
-    undominated,
     unpack_bits,
 )
-from planner.planning.leaf_kernel import cliques, one_touch_values
+from planner.planning.leaf_kernel import cliques, one_touch_values, undominated
 
 __all__ = ["Node", "SearchSpace"]
 

@@ -16,10 +16,10 @@ from hypothesis import assume, given, settings
 from hypothesis import strategies as st
 
 from planner.models.outlines import make_stable_pose
-from planner.planning.bitsets import SurvivorTable, pack_bits, undominated
+from planner.planning.bitsets import SurvivorTable, pack_bits
 from planner.planning.budget import Budget
 from planner.planning.confusability import confusability, survivor_table
-from planner.planning.leaf_kernel import cliques
+from planner.planning.leaf_kernel import cliques, undominated
 from planner.planning.outcomes import predict_outcomes
 from planner.planning.peers import information_gain
 from planner.planning.posed_set import pose_hypotheses
