@@ -5,9 +5,11 @@ Two slots match when both miss, or both hit with points within
 ``2 eps_d + (eps_t(h) + eps_t(g)) / 2`` (plus grazing slack) and normals within
 ``2 phi + dtheta(h) + dtheta(g)`` (plus vertex cones): :func:`slots_match`, the
 reference. Slot points lie on the path (a near miss's closest approach aside), so
-for many slots the same answer comes from sorted interval ends along the path and
-of normal arcs (:func:`match_rows`); misses are one set per path
-(:func:`miss_bits`). World frame, lengths in the object files' unit, radians.
+:func:`match_rows` tests only slots within reach along the path (a compiled sweep,
+:mod:`planner.planning.match_kernel`), or, where most pairs are within reach, gets
+the same answer from sorted interval ends along the path and of normal arcs;
+misses are one set per path (:func:`miss_bits`). World frame, lengths in the
+object files' unit, radians.
 """
 
 from __future__ import annotations
@@ -27,6 +29,7 @@ from planner.planning.bitsets import (
     pack_bits,
     unpack_bits,
 )
+from planner.planning.match_kernel import pair_rows, window_pairs
 from planner.types import SensorBounds
 
 if TYPE_CHECKING:
@@ -55,9 +58,10 @@ def miss_bits(outcomes: Outcomes, group: np.ndarray, n_groups: int) -> np.ndarra
 #: cos(A) - 1e-12 = cos(A + x) needs x <= sqrt(2e-12) ~ 1.42e-6.
 _ANGLE_BAND = 1.5e-6
 
-#: Hit slots per path up to which every pair is compared one by one (cheaper than
-#: sorting intervals when there are few).
-_FEW_HITS = 24
+#: Pairs per hit slot and bitset word up to which the sweep tests pairs one by one
+#: (:mod:`planner.planning.match_kernel`, ~10 ns a pair); past it sorted interval
+#: ends are cheaper (~2.5 us a hit slot at three words, growing with the words).
+_PAIRS_PER_HIT = 64
 
 
 def match_rows(
@@ -70,7 +74,9 @@ def match_rows(
     """(C, H, W) bitsets R over hypotheses (taken in `order`, default as given) such
     that R | R^T is the confusability of hits (misses: `miss_bits`).
 
-    Slot points lie on the path (a near miss's closest approach aside), so two
+    Where few pairs of hit slots lie within reach of each other along the path,
+    those pairs are tested one by one (:func:`~planner.planning.match_kernel.pair_rows`).
+    Otherwise: slot points lie on the path (a near miss's closest approach aside), so two
     hits match when their intervals ``distance +- reach`` and their normal arcs
     ``angle +- alpha`` both overlap; sorted interval ends turn these tests into
     prefix and suffix unions of bitsets (:class:`~planner.planning.bitsets.IntervalUnions`).
@@ -147,8 +153,15 @@ class _Items:
         owners = np.broadcast_to(owner, self.hit.shape)
         rows = np.zeros((n_paths, n_hyp, width), dtype=np.uint64)
         # (misses match misses: see `miss_bits`)
-        if self.hit.sum(axis=1).max(initial=0) <= _FEW_HITS:  # few: every pair one by one
-            return rows | self._all_pairs(owner)
+        band = 1e-13 * posed.scale
+        # few pairs of slots within reach along the path: test those one by one
+        allowed = _PAIRS_PER_HIT * (width + 1) * self.hit.sum()
+        if window_pairs(self.hit, self.d, self.r, 1e4 * band) <= allowed:
+            slots = self.slots
+            columns = (slots.x, slots.y, slots.cos, slots.sin, self.r, self.a)
+            columns += (slots.cos_alpha, slots.sin_alpha)
+            pair_rows(self.hit, self.d, columns, owner, 1e4 * band, rows)
+            return rows
         # arcs clear of the cut at the heading overlap iff their intervals do
         finite = self.hit & np.isfinite(self.d)
         clear = (self.u - self.a >= _ANGLE_BAND) & (self.u + self.a <= 2 * math.pi - _ANGLE_BAND)
@@ -161,7 +174,6 @@ class _Items:
         )
         # near a tie: another slot's interval starts within rounding (distances) or
         # within the cosine slack (angles) of this one's end
-        band = 1e-13 * posed.scale
         on_path = clear & (self.off == 0)
         regular = on_path & ~close_ends(d_low, d_high, on_path, -band, band)
         regular &= ~close_ends(u_low, u_high, on_path, -1e-12, _ANGLE_BAND)
@@ -252,22 +264,6 @@ class _Items:
             hit = slots_match(self._slots_at(c[e], k[e]), self._slots_at(c[e], j * n_hyp + g))
             ok[e[hit], g[hit]] = True
         return pack_bits(ok)
-
-    def _all_pairs(self, owner: np.ndarray) -> np.ndarray:
-        """(c, H, W): for each pair of hit slots of a path, each pair once (the
-        transpose completes it), the owner of the second in the first's row."""
-        n_paths, n_hyp = len(self.hit), len(owner) // SLOTS
-        at = compact(self.hit)
-        path = np.arange(n_paths)[:, None]
-        first, second = np.triu_indices(at.shape[1])
-        ok = (at[:, first] >= 0) & (at[:, second] >= 0)
-        columns = self._slots_at(path, np.maximum(at, 0))
-        mine = Slots(*(getattr(columns, f.name)[:, first] for f in fields(Slots)))
-        theirs = Slots(*(getattr(columns, f.name)[:, second] for f in fields(Slots)))
-        c, p = np.nonzero(slots_match(mine, theirs) & ok)
-        pairs = np.zeros((n_paths, n_hyp, n_hyp), dtype=bool)
-        pairs[c, owner[at[c, first[p]]], owner[at[c, second[p]]]] = True
-        return pack_bits(pairs)
 
     def _exact(
         self, c: np.ndarray, k: np.ndarray, targets: np.ndarray, owner: np.ndarray, chunk: int

@@ -503,8 +503,8 @@ def slot_scenes(draw):
 @settings(max_examples=120, deadline=None)
 @given(slot_scenes(), st.booleans())
 def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
-    # with many hit slots on a path its relation comes from sorted interval ends;
-    # `every_path` sends paths with few hits that way too
+    # hit slots are tested pair by pair along each path, or (with many pairs in
+    # reach of each other) by sorted interval ends; `every_path` sends all that way
     hyps, sensor, heading, valid, hit, point, angle, spread, slack, distance, offset = scene
     posed = pose_hypotheses(hyps, MODELS)
     nominal = point[:, :, 0]
@@ -539,7 +539,7 @@ def test_interval_passes_agree_with_the_pairwise_test(scene, every_path):
         event("an arc across the heading")
     with pytest.MonkeyPatch.context() as patch:
         if every_path:
-            patch.setattr(matching, "_FEW_HITS", 0)
+            patch.setattr(matching, "_PAIRS_PER_HIT", 0)
         conf = confusability(posed, out, sensor)
         table = class_survivors(posed, out, sensor)
     np.testing.assert_array_equal(conf, dense_confusability(posed, out, sensor))
