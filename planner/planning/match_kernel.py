@@ -104,16 +104,18 @@ def _set(rows, g, h):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _pair_rows(hit, d, fields, owner, band, rows):  # type: ignore[no-untyped-def]
+def _pair_rows(hit, d, x, y, cos, sin, reach, alpha, cos_a, sin_a, owner, band, rows):  # type: ignore[no-untyped-def]
+    fields = (x, y, cos, sin, reach, alpha, cos_a, sin_a)
     for c in range(hit.shape[0]):
         on, off = _finite_hits(hit[c], d[c])
         n_on = len(on)
         at = np.concatenate((on, off))
         # the path's hit items, those along it sorted by distance, side by side
-        f = np.empty((len(at), fields.shape[0]))
-        for k in range(len(at)):
-            for q in range(fields.shape[0]):
-                f[k, q] = fields[q, c, at[k]]
+        f = np.empty((len(at), 8))
+        for q in range(8):
+            column = fields[q]
+            for k in range(len(at)):
+                f[k, q] = column[c, at[k]]
         dist = d[c, on]
         who = owner[at]
         top = _largest(f[:, 4], np.arange(n_on))
@@ -147,7 +149,7 @@ def pair_rows(
     _pair_rows(
         c_array(hit, dtype=np.bool_),
         c_array(d, dtype=np.float64),
-        np.stack(fields).astype(np.float64, copy=False),
+        *(c_array(f, dtype=np.float64) for f in fields),
         c_array(owner, dtype=np.int64),
         float(band),
         rows,
