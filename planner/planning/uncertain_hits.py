@@ -19,6 +19,7 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
+from planner.planning.near_kernel import near_stretches
 
 __all__ = [
     "NearContact",
@@ -313,10 +314,7 @@ def near_misses(
     # a miss can only pass near the outline if it passes near its bounding circle
     to_centre = segment_distance(fc.centre_x, fc.centre_y, ox, oy, ex_r, ey_r)
     c, h = np.nonzero(~hit & (to_centre - fc.radius <= fc.vertex_tol + fc.margin))
-    near = np.ones((len(c), fc.valid.shape[1]), dtype=bool)
-    return _near_stretch(
-        fc, origins, directions, c, h, np.zeros(len(c)), lengths[c], near, hit.shape
-    )
+    return _near_stretch(fc, origins, directions, c, h, (np.zeros(len(c)), lengths[c]), hit.shape)
 
 
 def near_after_slip(
@@ -334,13 +332,8 @@ def near_after_slip(
     :func:`near_misses`, beyond the contact and leaving out the faces within the
     vertex zone of the contact (the nominal and vertex outcomes cover those)."""
     c, h = np.nonzero(slip)
-    at_contact = (
-        segment_distance(px[c, h, None], py[c, h, None], fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h])
-        <= fc.vertex_tol[h, None]
-    )
-    return _near_stretch(
-        fc, origins, directions, c, h, dist[c, h], lengths[c], ~at_contact, slip.shape
-    )
+    span = (dist[c, h], lengths[c])
+    return _near_stretch(fc, origins, directions, c, h, span, slip.shape, (px[c, h], py[c, h]))
 
 
 def _near_stretch(
@@ -349,38 +342,27 @@ def _near_stretch(
     directions: np.ndarray,
     c: np.ndarray,
     h: np.ndarray,
-    start: np.ndarray,
-    end: np.ndarray,
-    allowed: np.ndarray,
+    span: tuple[np.ndarray, np.ndarray],
     shape: tuple[int, ...],
+    contact: tuple[np.ndarray, np.ndarray] | None = None,
 ) -> NearContact:
-    """For pairs (path c, hypothesis h), the stretch of each path between `start`
-    and `end` along it within the vertex zone of an `allowed` ((n, F)) face it may
-    meet, as a point mid-way with that slack, and the cone of those faces'
-    normals; a NearContact of `shape` (unset elsewhere)."""
-    ox, oy = origins[c, 0, None], origins[c, 1, None]
-    dx, dy = directions[c, 0, None], directions[c, 1, None]
-    nx, ny = fc.nx[h], fc.ny[h]
-    lo, hi = _capsule_interval(
-        ox, oy, dx, dy, fc.sx[h], fc.sy[h], fc.ex[h], fc.ey[h], fc.vertex_tol[h, None]
+    """For pairs (path c, hypothesis h), the stretch of each path between distances
+    `span` along it within the vertex zone of a face it may meet (none within that
+    zone of the `contact` point), as a point mid-way with that slack, and the cone
+    of those faces' normals; a NearContact of `shape` (unset elsewhere)."""
+    ox, oy, dx, dy = origins[c, 0], origins[c, 1], directions[c, 0], directions[c, 1]
+    faces = (fc.sx, fc.sy, fc.ex, fc.ey, fc.nx, fc.ny)
+    found = near_stretches(
+        faces, fc.valid, fc.vertex_tol, fc.turn_sin, (ox, oy, dx, dy), h, span, contact
     )
-    lo, hi = np.maximum(lo, start[:, None]), np.minimum(hi, end[:, None])
-    near = fc.valid[h] & allowed & (dx * nx + dy * ny < fc.turn_sin[h, None]) & (lo <= hi)
-    flag = near.any(axis=-1)
-    # rows with no near face keep their infinities out of the sums
-    s_lo = np.where(flag, np.where(near, lo, np.inf).min(axis=-1), 0.0)
-    s_hi = np.where(flag, np.where(near, hi, -np.inf).max(axis=-1), 0.0)
-    angle = np.arctan2(ny, nx)
-    base = np.take_along_axis(angle, np.argmax(near, axis=-1)[:, None], axis=-1)
-    turn = (angle - base + math.pi) % (2 * math.pi) - math.pi
-    t_lo = np.where(flag, np.where(near, turn, np.inf).min(axis=-1), 0.0)
-    t_hi = np.where(flag, np.where(near, turn, -np.inf).max(axis=-1), 0.0)
+    flag = found[:, 0] > 0
+    s_lo, s_hi, base, t_lo, t_hi = found[:, 1:].T
     mid = (s_lo + s_hi) / 2
     values = (
         flag,
-        ox[:, 0] + mid * dx[:, 0],
-        oy[:, 0] + mid * dy[:, 0],
-        base[:, 0] + (t_lo + t_hi) / 2,
+        ox + mid * dx,
+        oy + mid * dy,
+        base + (t_lo + t_hi) / 2,
         np.minimum((t_hi - t_lo) / 2, math.pi),
         (s_hi - s_lo) / 2,
     )
@@ -389,58 +371,3 @@ def _near_stretch(
     for target, value in zip(out, values, strict=True):
         target[c[flag], h[flag]] = value[flag]
     return NearContact(*out)
-
-
-def _capsule_interval(
-    ox: np.ndarray,
-    oy: np.ndarray,
-    dx: np.ndarray,
-    dy: np.ndarray,
-    ax: np.ndarray,
-    ay: np.ndarray,
-    bx: np.ndarray,
-    by: np.ndarray,
-    r: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Where along the line o + s d (unit d) the points lie within `r` of the
-    segment [a, b] (broadcast): the interval [lo, hi] (lo > hi when empty). The
-    set is convex, the union of the line's chords through the two end disks and
-    through the band along the segment."""
-    ends = [_disk_chord(ox, oy, dx, dy, px, py, r) for px, py in ((ax, ay), (bx, by))]
-    length = np.hypot(bx - ax, by - ay)
-    ux, uy = (bx - ax) / np.maximum(length, 1e-300), (by - ay) / np.maximum(length, 1e-300)
-    # the band: |u x (p - a)| <= r and 0 <= (p - a) . u <= |b - a|, each linear in s
-    side = _linear_range(ux * (oy - ay) - uy * (ox - ax), ux * dy - uy * dx, -r, r)
-    along = _linear_range((ox - ax) * ux + (oy - ay) * uy, dx * ux + dy * uy, 0.0, length)
-    band = (np.maximum(side[0], along[0]), np.minimum(side[1], along[1]))
-    pieces = [*ends, band]
-    lo = np.minimum.reduce([np.where(p[0] <= p[1], p[0], np.inf) for p in pieces])
-    hi = np.maximum.reduce([np.where(p[0] <= p[1], p[1], -np.inf) for p in pieces])
-    return lo, hi
-
-
-def _disk_chord(
-    ox: np.ndarray, oy: np.ndarray, dx: np.ndarray, dy: np.ndarray,
-    px: np.ndarray, py: np.ndarray, r: np.ndarray,
-) -> tuple[np.ndarray, np.ndarray]:  # fmt: skip
-    """The interval of s where o + s d lies within `r` of p (lo > hi when empty)."""
-    wx, wy = px - ox, py - oy
-    centre, off = wx * dx + wy * dy, wx * dy - wy * dx
-    half_sq = r * r - off * off
-    half = np.sqrt(np.maximum(half_sq, 0.0))
-    return np.where(half_sq >= 0, centre - half, np.inf), np.where(
-        half_sq >= 0, centre + half, -np.inf
-    )
-
-
-def _linear_range(
-    start: np.ndarray, rate: np.ndarray, low: np.ndarray | float, high: np.ndarray | float
-) -> tuple[np.ndarray, np.ndarray]:
-    """The interval of s where low <= start + s rate <= high (lo > hi when empty)."""
-    flat = np.abs(rate) < 1e-12
-    with np.errstate(divide="ignore", invalid="ignore"):
-        a, b = (low - start) / rate, (high - start) / rate
-    inside = (start >= low) & (start <= high)
-    lo = np.where(flat, np.where(inside, -np.inf, np.inf), np.minimum(a, b))
-    hi = np.where(flat, np.where(inside, np.inf, -np.inf), np.maximum(a, b))
-    return lo, hi
