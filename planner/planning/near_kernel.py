@@ -7,7 +7,9 @@ slip). For each (path, hypothesis) pair this finds, in one pass over the hypothe
 faces, the stretch of the path within that zone of some such face, and the range
 of those faces' normals. Each face's part of the path is the chord of a capsule:
 the points within r of a segment form a convex set, the union of the chords
-through the two end disks and through the band along the segment.
+through the two end disks and through the band along the segment. A hit's path
+may also pass a vertex before its contact (a close pass): :func:`closest_vertices`
+finds the vertex nearest each path's run up to its contact.
 """
 
 from __future__ import annotations
@@ -19,7 +21,7 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 
-__all__ = ["near_stretches"]
+__all__ = ["closest_vertices", "near_stretches"]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -136,3 +138,58 @@ def near_stretches(
         out,
     )  # fmt: skip
     return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _closest(sx, sy, valid, tol, ox, oy, px, py, pairs, out_k, out_gap):  # type: ignore[no-untyped-def]
+    for e in range(pairs.shape[0]):
+        c, h = pairs[e, 0], pairs[e, 1]
+        best, k = math.inf, 0
+        for j in range(sx.shape[1]):
+            if not valid[h, j]:
+                continue
+            if math.hypot(sx[h, j] - px[c, h], sy[h, j] - py[c, h]) <= tol[h]:
+                continue  # within the contact's own vertex zone
+            gx, gy = segment_gap(sx[h, j], sy[h, j], ox[c], oy[c], px[c, h], py[c, h])
+            gap = math.hypot(gx, gy)
+            if gap < best:
+                best, k = gap, j
+        out_k[e], out_gap[e] = k, best
+
+
+def closest_vertices(
+    vertices: tuple[np.ndarray, np.ndarray],
+    valid: np.ndarray,
+    tol: np.ndarray,
+    origins: np.ndarray,
+    contact: tuple[np.ndarray, np.ndarray],
+    pairs: tuple[np.ndarray, np.ndarray],
+) -> tuple[np.ndarray, np.ndarray]:
+    """For pairs (path c, hypothesis h): the vertex of h (`vertices` x, y (H, F),
+    `valid`) nearest the path's run from its origin (`origins` (C, 2)) to its
+    `contact` point (x, y (C, H)), leaving out the vertices within `tol` (H,) of the
+    contact, and its distance (inf, vertex 0, when none is left).
+
+    >>> square = (np.array([[0.0, 2.0, 2.0, 0.0]]), np.array([[0.0, 0.0, 2.0, 2.0]]))
+    >>> k, gap = closest_vertices(square, np.ones((1, 4), bool), np.array([0.1]),
+    ...     np.array([[3.0, -1.0]]), (np.array([[1.0]]), np.array([[0.0]])),
+    ...     (np.array([0]), np.array([0])))
+    >>> int(k[0]), round(float(gap[0]), 3)
+    (1, 0.447)
+    """
+    n = len(pairs[0])
+    out_k, out_gap = np.zeros(n, dtype=np.int64), np.empty(n)
+    _closest(
+        c_array(vertices[0], dtype=np.float64),
+        c_array(vertices[1], dtype=np.float64),
+        c_array(valid, dtype=np.bool_),
+        c_array(tol, dtype=np.float64),
+        c_array(origins[:, 0], dtype=np.float64),
+        c_array(origins[:, 1], dtype=np.float64),
+        c_array(contact[0], dtype=np.float64),
+        c_array(contact[1], dtype=np.float64),
+        c_array(np.column_stack(pairs), dtype=np.int64),
+        out_k,
+        out_gap,
+    )
+    return out_k, out_gap

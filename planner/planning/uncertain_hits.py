@@ -19,7 +19,7 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
-from planner.planning.near_kernel import near_stretches
+from planner.planning.near_kernel import closest_vertices, near_stretches
 
 __all__ = [
     "NearContact",
@@ -249,14 +249,16 @@ def close_passes(
     reaching the contact (any vertex outside the contact's own vertex zone, the
     hit face's ends included): the true outline may be met there first, at the
     vertex, with the normal of either face meeting there."""
-    ox, oy = origins[:, 0, None, None], origins[:, 1, None, None]
-    gap = segment_distance(fc.sx, fc.sy, ox, oy, px[..., None], py[..., None])  # (c, H, F)
     # the face hit's own ends count too: a path that runs past one of them at a
     # shallow angle may meet the adjacent face there first
-    near_contact = np.hypot(fc.sx - px[..., None], fc.sy - py[..., None]) <= fc.vertex_tol[:, None]
-    gap = np.where(fc.valid & ~near_contact & hit[..., None], gap, np.inf)
-    k = np.argmin(gap, axis=-1)
-    flag = np.take_along_axis(gap, k[..., None], axis=-1)[..., 0] <= fc.vertex_tol
+    c, h = np.nonzero(hit)
+    nearest, gap = closest_vertices(
+        (fc.sx, fc.sy), fc.valid, fc.vertex_tol, origins, (px, py), (c, h)
+    )
+    k = np.zeros(hit.shape, dtype=np.int64)
+    k[c, h] = nearest
+    flag = np.zeros(hit.shape, dtype=bool)
+    flag[c, h] = gap <= fc.vertex_tol[h]
     vx, vy = fc.sx[rows, k], fc.sy[rows, k]
     before = fc.prev[rows, k]
     centre, spread = np.zeros(hit.shape), np.zeros(hit.shape)
