@@ -140,17 +140,30 @@ def near_stretches(
     return out
 
 
+#: Relative margin within which a squared length does not decide a comparison
+#: that the rounded length (hypot) decides.
+_SCREEN = 1e-9
+
+
 @numba.njit(cache=True, nogil=True)
 def _closest(sx, sy, valid, tol, ox, oy, px, py, pairs, out_k, out_gap):  # type: ignore[no-untyped-def]
     for e in range(pairs.shape[0]):
         c, h = pairs[e, 0], pairs[e, 1]
         best, k = math.inf, 0
+        # squared lengths screen out the clear cases; hypot decides the close ones
+        zone = tol[h] * tol[h]
         for j in range(sx.shape[1]):
             if not valid[h, j]:
                 continue
-            if math.hypot(sx[h, j] - px[c, h], sy[h, j] - py[c, h]) <= tol[h]:
+            vx, vy = sx[h, j] - px[c, h], sy[h, j] - py[c, h]
+            sq = vx * vx + vy * vy
+            if sq <= zone * (1 - _SCREEN) or (
+                sq <= zone * (1 + _SCREEN) and math.hypot(vx, vy) <= tol[h]
+            ):
                 continue  # within the contact's own vertex zone
             gx, gy = segment_gap(sx[h, j], sy[h, j], ox[c], oy[c], px[c, h], py[c, h])
+            if gx * gx + gy * gy > best * best * (1 + _SCREEN):
+                continue
             gap = math.hypot(gx, gy)
             if gap < best:
                 best, k = gap, j

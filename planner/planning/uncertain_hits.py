@@ -223,7 +223,10 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
                     or min(sy[row, j], ey[row, j]) > py + pad
                 ):
                     continue  # farther than `reach`
-                d = math.hypot(*segment_gap(px, py, sx[row, j], sy[row, j], ex[row, j], ey[row, j]))
+                gx, gy = segment_gap(px, py, sx[row, j], sy[row, j], ex[row, j], ey[row, j])
+                if gx * gx + gy * gy > pad * pad * (1 + 1e-9):
+                    continue  # farther than `reach` (squares decide all but near-ties)
+                d = math.hypot(gx, gy)
                 nearest = min(nearest, d)
                 facing = dx[i] * nx[row, j] + dy[i] * ny[row, j] < turn_sin[row]
                 if j == own or d > reach[row] or not facing:
