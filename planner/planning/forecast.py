@@ -169,7 +169,8 @@ def recognition_ranking(
     outcome)``. The first path is always judged, the rest while the `budget`
     allows: `SHORTLIST` of them, and past that (up to `SHORTLIST_ROUNDS` times as
     many) while none is predicted to change the classes. Candidates `first` are
-    judged before the shortlist."""
+    judged before the shortlist; once one of them is predicted to leave one class
+    whatever the truth, nothing can rank above it and the shortlist is not judged."""
     budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
@@ -204,6 +205,8 @@ def recognition_ranking(
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))
         expected.append(float(weight @ left))
+        if len(rows) <= len(first) and expected[-1] <= 1 + 1e-9:
+            break  # a path of `first` settles every truth: it stays first
     rank = np.lexsort((np.array(expected), -np.array(p_dm))) if rows else np.zeros(0, int)
     return RecognitionRanking(
         np.array(rows, dtype=int)[rank],

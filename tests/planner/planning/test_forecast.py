@@ -304,6 +304,11 @@ def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monke
     judged.clear()
     monkeypatch.setattr(forecast, "_classes_after", lambda *a: 1)
     assert len(forecast.recognition_ranking(session, found).rows) == forecast.SHORTLIST
+    # a path judged first that leaves one class whatever the truth ends the judging
+    first = int(ranking.rows[-1])
+    assert forecast.recognition_ranking(session, found, first=[first]).rows.tolist() == [first]
+    monkeypatch.setattr(forecast, "_classes_after", lambda s, p, o, c, h: 2 if c == first else 1)
+    assert len(forecast.recognition_ranking(session, found, first=[first]).rows) > 1
 
 
 def test_a_predicted_observation_is_observed_once_per_plan(monkeypatch):
