@@ -62,8 +62,9 @@ _WEAK = 0.05
 #: best path does better than the outcome model's, not only when the outcome
 #: model's best path is weak: the worst-case model calls too much confusable near
 #: small features and on drawn curves (measured: README, "Beside the published
-#: strategies").
-PREDICTED_FIRST = ("lookahead",)
+#: strategies"). ``optimal`` searches the same model as ``lookahead`` to the end,
+#: so it asks the same question of the recognition.
+PREDICTED_FIRST = ("lookahead", "optimal")
 
 
 def plan_session(

@@ -185,14 +185,15 @@ def _curved_touched() -> Session:
     return session
 
 
-def test_lookahead_takes_the_recognitions_ranking_when_it_predicts_better(monkeypatch):
-    """``lookahead`` judges the outcome model's best path with the recognition
-    before the shortlist, and takes the recognition's ranking when it predicts a
-    path that does better (here P(DM) 0 -> 0.99); without that rule (or as
-    ``pdm``) the outcome model's ranking stands."""
+@pytest.mark.parametrize("strategy", ["lookahead", "optimal"])
+def test_lookahead_takes_the_recognitions_ranking_when_it_predicts_better(monkeypatch, strategy):
+    """``lookahead`` (and ``optimal``, over the same model) judges the outcome
+    model's best path with the recognition before the shortlist, and takes the
+    recognition's ranking when it predicts a path that does better (here P(DM) 0
+    -> 0.99); without that rule (or as ``pdm``) the outcome model's ranking stands."""
     session = _curved_touched()
     where = (141.42, 141.42)
-    config = StrategyConfig(budget_ms=None)
+    config = StrategyConfig(name=strategy, budget_ms=None)
     found = plan_session(session, where, config, 0)
     assert found.paths and found.paths[0].scored_by == "recognition"
     note = found.note or ""
