@@ -45,30 +45,70 @@ def face_groups(
     parallel slabs, whose intersection is one slab: their group id `gid` (K, S) and,
     per group (K, G), its face's normal and whether any contact of it is used. G is
     at most the number of faces the USED contacts touch, however many contacts
-    there are (an unused contact joins group 0 and is skipped)."""
+    there are. Groups are numbered in the order of their (normal x, normal y,
+    offset); an unused contact takes the last group's number (0 when none) and is
+    skipped.
+
+    >>> n = np.array([[[0.0, 1.0], [1.0, 0.0], [0.0, 1.0]]])
+    >>> gid, g_n, g_use = face_groups(n, np.array([[2.0, 0.0, 2.0]]), np.ones((1, 3), bool))
+    >>> gid.tolist(), g_n.tolist(), g_use.tolist()
+    ([[0, 1, 0]], [[[0.0, 1.0], [1.0, 0.0]]], [[True, True]])
+    """
     K, S = use.shape
-    big = np.inf
-    keys = (
-        np.where(use, face_offsets, big),
-        np.where(use, face_normals[..., 1], big),
-        np.where(use, face_normals[..., 0], big),
-    )
-    order = np.lexsort(keys, axis=-1)
-    key = np.stack(keys, axis=-1)
-    ranked = np.take_along_axis(key, order[..., None], axis=1)
-    first = np.ones((K, S), dtype=bool)
-    first[:, 1:] = np.any(ranked[:, 1:] != ranked[:, :-1], axis=-1)
-    first &= np.take_along_axis(use, order, axis=1)
-    gid = np.empty((K, S), dtype=np.int64)
-    np.put_along_axis(gid, order, np.maximum(np.cumsum(first, axis=1) - 1, 0), axis=1)
-    G = int(first.sum(axis=1).max(initial=0))
-    rows = np.broadcast_to(np.arange(K)[:, None], (K, S))
+    gid = np.zeros((K, S), dtype=np.int64)
+    count = np.zeros(K, dtype=np.int64)
+    normals = c_array(face_normals, dtype=np.float64)
+    _face_groups(normals, c_array(face_offsets, dtype=np.float64), c_array(use), gid, count)
+    G = int(count.max(initial=0))
     g_normals = np.zeros((K, G, 2))
     g_use = np.zeros((K, G), dtype=bool)
     if G:
-        g_normals[rows[use], gid[use]] = face_normals[use]
+        rows = np.broadcast_to(np.arange(K)[:, None], (K, S))
+        g_normals[rows[use], gid[use]] = normals[use]
         g_use[rows[use], gid[use]] = True
     return gid, g_normals, g_use
+
+
+@numba.njit(cache=True, nogil=True)
+def _face_groups(normals, offsets, use, gid, count):  # type: ignore[no-untyped-def]
+    """Per row: the used contacts sorted (stably) by normal x, normal y, offset, a
+    new group at each change of the three."""
+    K, S = use.shape
+    order = np.empty(S, dtype=np.int64)
+    for k in range(K):
+        m = 0
+        for s in range(S):
+            if use[k, s]:
+                # insertion sort: S is the number of contacts
+                q = m
+                while q > 0 and _key_less(normals[k], offsets[k], s, order[q - 1]):
+                    order[q] = order[q - 1]
+                    q -= 1
+                order[q] = s
+                m += 1
+        g = -1
+        for p in range(m):
+            s = order[p]
+            if p == 0 or _key_less(normals[k], offsets[k], order[p - 1], s):
+                g += 1
+            gid[k, s] = g
+        for s in range(S):
+            if not use[k, s]:
+                gid[k, s] = max(g, 0)
+        count[k] = g + 1
+
+
+@numba.njit(cache=True, nogil=True, inline="always")
+def _key_less(normals, offsets, a, b):  # type: ignore[no-untyped-def]
+    """Is contact a's (normal x, normal y, offset) before contact b's?"""
+    for i in range(3):
+        x = normals[a, i] if i < 2 else offsets[a]
+        y = normals[b, i] if i < 2 else offsets[b]
+        if x < y:
+            return True
+        if x > y:
+            return False
+    return False
 
 
 def latest_faces(

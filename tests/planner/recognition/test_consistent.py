@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+
 import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
@@ -114,3 +116,25 @@ def test_polygon_areas_are_the_array_formulas_bit_for_bit(seed, slots):
     assert np.array_equal(found, _areas_by_arrays(vx, vy, ok))
     corners = np.array([[[[0.0, 2, 2, 0]]], [[[0.0, 0, 2, 2]]]])  # a 2 x 2 square
     assert polygon_areas(*corners, np.ones((1, 1, 4), bool))[0, 0] == 4.0
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**31), st.integers(1, 6), st.integers(1, 8))
+def test_face_groups_number_the_distinct_faces_in_sorted_order(seed, rows, contacts):
+    # contacts on a few faces (repeated keys), some unused: a group per distinct
+    # (normal, offset) of the used ones, numbered in sorted order
+    from planner.recognition.polygons import face_groups
+
+    rng = np.random.default_rng(seed)
+    angle = rng.integers(0, 4, (rows, contacts)) * math.pi / 2
+    normals = np.stack([np.cos(angle), np.sin(angle)], axis=-1)
+    offsets = rng.integers(0, 3, (rows, contacts)).astype(float)
+    use = rng.random((rows, contacts)) < 0.7
+    gid, g_normals, g_use = face_groups(normals, offsets, use)
+    for k in range(rows):
+        keys = sorted({(*normals[k, s], offsets[k, s]) for s in range(contacts) if use[k, s]})
+        for s in np.flatnonzero(use[k]):
+            g = keys.index((*normals[k, s], offsets[k, s]))
+            assert gid[k, s] == g and g_use[k, g]
+            np.testing.assert_array_equal(g_normals[k, g], normals[k, s])
+        assert g_use[k].sum() == len(keys)
