@@ -198,7 +198,8 @@ def clear_paths(
     check = np.broadcast_to(~hit, (len(keep), len(observations))).copy()
     check[:, hit] = assigned[:, : int(hit.sum())]
     check &= keep[:, None] & (length > 0)[None, :]
-    bucket = _tol_bucket(shrink, floor)
+    step = _tol_step(shrink, floor)
+    steps = int(step.max(initial=0)) + 1
     rows, paths = np.nonzero(check)
     for lo in range(0, len(rows), CHECK_PAIRS):
         i, k = rows[lo : lo + CHECK_PAIRS], paths[lo : lo + CHECK_PAIRS]
@@ -207,17 +208,17 @@ def clear_paths(
         b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
         lines = shapely.linestrings(np.stack([a, b], axis=1))
         # one pass per (height, shrink): the segments sorted by it and split
-        values, level = np.unique(bucket[i], return_inverse=True)
-        kinds, which = np.unique(layer[k] * len(values) + level, return_inverse=True)
+        kinds, which = np.unique(layer[k] * steps + step[i], return_inverse=True)
         ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
         for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
-            z, value = divmod(int(kind), len(values))
-            crossed = group.crossed(lines[sel], float(values[value]), z)
+            z, n = divmod(int(kind), steps)
+            crossed = group.crossed(lines[sel], floor * 1.15 ** float(n), z)
             keep[i[sel[crossed]]] = False
     return keep
 
 
-def _tol_bucket(tol: np.ndarray, floor: float) -> np.ndarray:
-    """Round tolerances UP onto a geometric grid (sound: a larger shrink is more lenient)."""
+def _tol_step(tol: np.ndarray, floor: float) -> np.ndarray:
+    """Tolerances rounded UP onto the geometric grid ``floor * 1.15 ** n`` (sound: a
+    larger shrink is more lenient): each one's step n (>= 0)."""
     tol = np.maximum(tol, floor)
-    return floor * 1.15 ** np.ceil(np.log(tol / floor) / math.log(1.15) - SHARE_SLACK)
+    return np.ceil(np.log(tol / floor) / math.log(1.15) - SHARE_SLACK).astype(np.int64)
