@@ -157,6 +157,7 @@ def recognition_ranking(
     found: Analysis,
     budget: Budget | None = None,
     first: Sequence[int] = (),
+    until_sure: bool = False,
 ) -> RecognitionRanking:
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
@@ -169,8 +170,9 @@ def recognition_ranking(
     outcome)``. The first path is always judged, the rest while the `budget`
     allows: `SHORTLIST` of them, and past that (up to `SHORTLIST_ROUNDS` times as
     many) while none is predicted to change the classes. Candidates `first` are
-    judged before the shortlist; once one of them is predicted to leave one class
-    whatever the truth, nothing can rank above it and the shortlist is not judged."""
+    judged before the shortlist. With `until_sure` the judging stops at the first
+    path predicted to leave one class whatever the truth: nothing judged after it
+    can rank above it (the paths below it are then not all judged)."""
     budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
@@ -205,8 +207,8 @@ def recognition_ranking(
         rows.append(int(c))
         p_dm.append(float(weight @ (left == 1)))
         expected.append(float(weight @ left))
-        if len(rows) <= len(first) and expected[-1] <= 1 + 1e-9:
-            break  # a path of `first` settles every truth: it stays first
+        if until_sure and expected[-1] <= 1 + 1e-9:
+            break  # it settles every truth: nothing judged later can rank above it
     rank = np.lexsort((np.array(expected), -np.array(p_dm))) if rows else np.zeros(0, int)
     return RecognitionRanking(
         np.array(rows, dtype=int)[rank],

@@ -330,7 +330,7 @@ def _unless_predicted_better(
         return paths, ranking.note  # the model is sure of every outcome: it stands
     if budget.exhausted():
         return paths, ranking.note  # only the best path would be judged: no other to take
-    judged = recognition_ranking(session, found, budget, first=[best])
+    judged = recognition_ranking(session, found, budget, first=[best], until_sure=True)
     if judged.rows[0] == best:  # judged first, it stays first on a tie
         return paths, ranking.note
     at = int(np.flatnonzero(judged.rows == best)[0])  # the first path is always judged
@@ -344,7 +344,7 @@ def _unless_predicted_better(
         "the recognition predicts a better path than the outcome model's best "
         f"(P(DM) {p_best:.2f}, classes {judged.current} -> {e_best:.2f} expected)"
     )
-    return _recognition_paths(found, judged, ranking, config), "; ".join(
+    return _recognition_paths(found, judged, ranking, config, paths), "; ".join(
         filter(None, [_ranked_note(why, judged), ranking.note])
     )
 
@@ -374,12 +374,17 @@ def _by_recognition(
 
 
 def _recognition_paths(
-    found: Analysis, judged: RecognitionRanking, ranking: Ranking, config: StrategyConfig
+    found: Analysis,
+    judged: RecognitionRanking,
+    ranking: Ranking,
+    config: StrategyConfig,
+    rest: Sequence[PlannedPath] = (),
 ) -> list[PlannedPath]:
     """The judged paths predicted to leave fewer classes, best first, scored by the
-    recognition (its P(DM) is the forecast of the first `config.forecast`)."""
+    recognition (its P(DM) is the forecast of the first `config.forecast`), then
+    the paths of `rest` (the outcome model's ranking) not among them."""
     useful = judged.expected_classes < judged.current - 1e-9
-    return [
+    mine = [
         dataclasses.replace(
             planned(found, int(i), ranking, family="partial"),
             p_forecast=float(p) if k < config.forecast else None,
@@ -388,7 +393,9 @@ def _recognition_paths(
         for k, (i, p) in enumerate(
             zip(judged.rows[useful], judged.p_distinguishing[useful], strict=True)
         )
-    ][: config.max_paths]
+    ]
+    taken = {p.path for p in mine}
+    return [*mine, *(p for p in rest if p.path not in taken)][: config.max_paths]
 
 
 def _ranked_note(why: str | None, judged: RecognitionRanking) -> str:

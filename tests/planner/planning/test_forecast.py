@@ -305,11 +305,15 @@ def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monke
     judged.clear()
     monkeypatch.setattr(forecast, "_classes_after", lambda *a: 1)
     assert len(forecast.recognition_ranking(session, found).rows) == forecast.SHORTLIST
-    # a path judged first that leaves one class whatever the truth ends the judging
+    # until sure: a path predicted to leave one class whatever the truth ends the
+    # judging (judged first here, or the first after it)
     first = int(ranking.rows[-1])
-    assert forecast.recognition_ranking(session, found, first=[first]).rows.tolist() == [first]
-    monkeypatch.setattr(forecast, "_classes_after", lambda s, p, o, c, h: 2 if c == first else 1)
+    sure = forecast.recognition_ranking(session, found, first=[first], until_sure=True)
+    assert sure.rows.tolist() == [first]
     assert len(forecast.recognition_ranking(session, found, first=[first]).rows) > 1
+    monkeypatch.setattr(forecast, "_classes_after", lambda s, p, o, c, h: 2 if c == first else 1)
+    sure = forecast.recognition_ranking(session, found, first=[first], until_sure=True)
+    assert len(sure.rows) == 2 and sure.rows[1] == first
 
 
 def test_a_predicted_observation_is_observed_once_per_plan(monkeypatch):
