@@ -360,11 +360,14 @@ def _by_recognition(
     """No candidate informative for the outcome model (or only weakly: `why`, by
     default the ranking's note): the shortlisted paths after which the
     recognition predicts fewer classes, best first (P(DM) by the recognition,
-    then expected classes left), scored by the recognition."""
+    then expected classes left), scored by the recognition, judged until one
+    settles every truth; then the outcome model's. None when the recognition
+    predicts no path changes the classes."""
     why = why or ranking.note
-    judged = recognition_ranking(session, found, budget)
-    paths = _recognition_paths(found, judged, ranking, config)
-    if not paths:
+    judged = recognition_ranking(session, found, budget, until_sure=True)
+    rest = [planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
+    paths = _recognition_paths(found, judged, ranking, config, rest)
+    if not paths or paths[0].scored_by != "recognition":
         note = (
             f"{why}; the recognition predicts {judged.current} classes after each "
             f"of the {len(judged.rows)} paths it judged"
