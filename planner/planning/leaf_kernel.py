@@ -89,6 +89,7 @@ def _values(rows, sets, idx, w, inseparable, apart, rate, out):  # type: ignore[
     group = np.zeros(n_words, dtype=np.uint64)
     size = np.zeros(m_max, dtype=np.int64)
     clique = np.zeros(m_max, dtype=np.bool_)
+    w_stay, w_open = np.zeros(n_paths), np.zeros(n_paths)
     for b in range(n):
         members = 0
         for m in range(m_max):
@@ -98,35 +99,38 @@ def _values(rows, sets, idx, w, inseparable, apart, rate, out):  # type: ignore[
                 # without inseparable classes 0: never an open child's count (>= 2)
                 size[m] = _common(inseparable[g], sets[b]) if lazy else 0
                 clique[m] = False
-        known = np.zeros(m_max, dtype=np.bool_)
-        best = math.inf
-        for c in range(n_paths):
-            w_stay = 0.0
-            w_open = 0.0
-            for m in range(m_max):
-                g = idx[b, m]
-                if g < 0:
-                    continue
+        # member by member over every path (each member's rows lie side by side),
+        # each path's sums taken in member order
+        w_stay[:] = 0.0
+        w_open[:] = 0.0
+        for m in range(m_max):
+            g = idx[b, m]
+            if g < 0:
+                continue
+            known = False
+            for c in range(n_paths):
                 count = _common(rows[g, c], sets[b])
                 if count == members:
-                    w_stay += w[b, m]
+                    w_stay[c] += w[b, m]
                     continue
                 if count <= 1:
                     continue  # settled
                 if count == size[m]:
-                    if not known[m]:
+                    if not known:
                         for k in range(n_words):
                             group[k] = inseparable[g, k] & sets[b, k]
                         clique[m] = _clique(group, apart)
-                        known[m] = True
+                        known = True
                     if clique[m]:
                         continue  # settled: exactly its pairwise inseparable group
                 if rate > 0:
-                    w_open += w[b, m] * max(1.0, math.log(max(count, 1)) / rate)
+                    w_open[c] += w[b, m] * max(1.0, math.log(max(count, 1)) / rate)
                 else:
-                    w_open += w[b, m]
-            if w_stay < 1 - 1e-12:
-                value = (1.0 + w_open) / (1.0 - w_stay)
+                    w_open[c] += w[b, m]
+        best = math.inf
+        for c in range(n_paths):
+            if w_stay[c] < 1 - 1e-12:
+                value = (1.0 + w_open[c]) / (1.0 - w_stay[c])
                 if value < best:
                     best = value
         out[b] = best
