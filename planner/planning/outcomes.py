@@ -125,7 +125,10 @@ class Outcomes:
 
     @classmethod
     def concat(cls, parts: list[Outcomes]) -> Outcomes:
-        """The outcomes of several groups of paths, one after the other."""
+        """The outcomes of several groups of paths, one after the other (one group
+        as it is: outcomes are never written to once cast)."""
+        if len(parts) == 1:
+            return parts[0]
         return cls(
             **{f.name: np.concatenate([getattr(p, f.name) for p in parts]) for f in fields(cls)}
         )
