@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.planning.cast_faces import CastFaces, angle_cone
+from planner.planning.near_kernel import crossings
 from planner.planning.posed_set import PosedSet
 from planner.planning.uncertain_hits import (
     NearContact,
@@ -199,26 +200,17 @@ def _first_hits(
 ) -> _Hits:
     """The first face each path (c) meets on each hypothesis, if any."""
     n_hyp = len(fc.valid)
-    ox, oy = origins[:, 0, None, None], origins[:, 1, None, None]
-    dx, dy = directions[:, 0, None, None], directions[:, 1, None, None]
     length = lengths[:, None]
-    edge_x, edge_y = fc.ex - fc.sx, fc.ey - fc.sy
     # o + t d meets s + u (e - s) at t = (w x e)/(d x e), u = (w x d)/(d x e), with w = s - o
-    denom = dx * edge_y - dy * edge_x
-    wx, wy = fc.sx - ox, fc.sy - oy
-    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        t = (wx * edge_y - wy * edge_x) / denom
-        u = (wx * dy - wy * dx) / denom
-    meets = fc.valid & (np.abs(denom) > 1e-12 * fc.length)
-    meets &= (t >= 0) & (t <= length[..., None]) & (u >= 0) & (u <= 1)
-    t = np.where(meets, t, np.inf)
+    faces = (fc.sx, fc.sy, fc.ex, fc.ey)
+    t, u = crossings(origins, directions, lengths, faces, fc.length, fc.valid)
     face = np.argmin(t, axis=-1)
     dist = np.take_along_axis(t, face[..., None], axis=-1)[..., 0]
     hit = np.isfinite(dist)
     face = np.where(hit, face, -1)
     f = np.maximum(face, 0)
     rows = np.broadcast_to(np.arange(n_hyp), f.shape)
-    dx, dy = dx[..., 0], dy[..., 0]
+    dx, dy = directions[:, 0, None], directions[:, 1, None]
     reached = np.where(hit, dist, 0.0)
     px, py = origins[:, 0, None] + reached * dx, origins[:, 1, None] + reached * dy
     nx, ny = fc.nx[rows, f], fc.ny[rows, f]

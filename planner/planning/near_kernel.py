@@ -9,7 +9,8 @@ of those faces' normals. Each face's part of the path is the chord of a capsule:
 the points within r of a segment form a convex set, the union of the chords
 through the two end disks and through the band along the segment. A hit's path
 may also pass a vertex before its contact (a close pass): :func:`closest_vertices`
-finds the vertex nearest each path's run up to its contact.
+finds the vertex nearest each path's run up to its contact. Where each path first
+meets each hypothesis' faces, what all of this starts from, is :func:`crossings`.
 """
 
 from __future__ import annotations
@@ -21,7 +22,7 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 
-__all__ = ["closest_vertices", "near_stretches"]
+__all__ = ["closest_vertices", "crossings", "near_stretches"]
 
 
 @numba.njit(cache=True, nogil=True, inline="always")
@@ -206,3 +207,56 @@ def closest_vertices(
         out_gap,
     )
     return out_k, out_gap
+
+
+@numba.njit(cache=True, nogil=True, error_model="numpy")
+def _crossings(ox, oy, dx, dy, length, sx, sy, ex, ey, face_length, valid, t, u):  # type: ignore[no-untyped-def]
+    for c in range(len(ox)):
+        for h in range(sx.shape[0]):
+            for j in range(sx.shape[1]):
+                edge_x, edge_y = ex[h, j] - sx[h, j], ey[h, j] - sy[h, j]
+                denom = dx[c] * edge_y - dy[c] * edge_x
+                wx, wy = sx[h, j] - ox[c], sy[h, j] - oy[c]
+                t_cj = (wx * edge_y - wy * edge_x) / denom
+                u_cj = (wx * dy[c] - wy * dx[c]) / denom
+                meets = valid[h, j] and abs(denom) > 1e-12 * face_length[h, j]
+                meets = meets and t_cj >= 0 and t_cj <= length[c] and u_cj >= 0 and u_cj <= 1
+                t[c, h, j] = t_cj if meets else math.inf
+                u[c, h, j] = u_cj
+
+
+def crossings(
+    origins: np.ndarray,
+    directions: np.ndarray,
+    lengths: np.ndarray,
+    faces: tuple[np.ndarray, ...],
+    face_length: np.ndarray,
+    valid: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """Where each path (origin, unit direction, length: (C, 2), (C, 2), (C,)) crosses
+    the line of each face (`faces`: start x, y, end x, y, each (H, F)): `t` (C, H, F)
+    the distance along the path where it meets the face within both ends (inf
+    where it does not, or runs parallel), `u` the share along the face of that
+    crossing (from the start; taken even where the face is not met).
+
+    >>> t, u = crossings(np.array([[0.0, -5.0]]), np.array([[0.0, 1.0]]), np.array([10.0]),
+    ...     tuple(np.array([[v]]) for v in (-1.0, 0.0, 3.0, 0.0)), np.array([[4.0]]),
+    ...     np.ones((1, 1), bool))
+    >>> float(t[0, 0, 0]), float(u[0, 0, 0])
+    (5.0, 0.25)
+    """
+    shape = (len(origins), *valid.shape)
+    t, u = np.empty(shape), np.empty(shape)
+    _crossings(
+        c_array(origins[:, 0], dtype=np.float64),
+        c_array(origins[:, 1], dtype=np.float64),
+        c_array(directions[:, 0], dtype=np.float64),
+        c_array(directions[:, 1], dtype=np.float64),
+        c_array(lengths, dtype=np.float64),
+        *(c_array(f, dtype=np.float64) for f in faces),
+        c_array(face_length, dtype=np.float64),
+        c_array(valid, dtype=np.bool_),
+        t,
+        u,
+    )
+    return t, u
