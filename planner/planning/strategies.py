@@ -178,7 +178,16 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         ~result.exact[ok],
     )
     if result.truncated:
-        note = "; ".join(filter(None, [note, "search stopped at the budget"]))
+        # a search the budget stopped has valued some paths and only bounded the
+        # rest, and would prefer whichever it valued first: the information gain
+        # ranks every path alike (measured: README, "Beside the published strategies")
+        note = "; ".join(
+            filter(None, [note, "search stopped at the budget: ranked by information gain"])
+        )
+        cost = combined_objective(
+            -information_gain(ctx.table), ctx.motion, ctx.config.motion_weight
+        )
+        keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok])
     return Ranking(ok[_order(keys)], result.value, result.exact, result.truncated, note)
 
 

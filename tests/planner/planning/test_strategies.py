@@ -276,6 +276,26 @@ def test_budget_stops_with_the_best_so_far(limits, stopped_by):
     assert result.paths and all(p.family != "uninformative" for p in result.paths)
 
 
+def test_a_search_the_budget_stopped_ranks_by_information_gain():
+    """The budget stops the depth-3 search part way: the paths are ranked as
+    ``infogain`` ranks them (a stopped search would prefer the paths it valued
+    first); with the budget to finish, the search's own ranking."""
+    hyps = [hyp("square", 1.5 * i, 0.8 * i, cls=i, p=1 / 8) for i in range(8)]
+    config = StrategyConfig(
+        name="lookahead", depth=3, candidates=CandidateConfig(count=64), budget_work=20_000.0
+    )
+    stopped = plan(hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), config)
+    assert stopped.truncated and "ranked by information gain" in stopped.note
+    peer = plan(
+        hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), dataclasses.replace(config, name="infogain")
+    )
+    assert [p.path for p in stopped.paths] == [p.path for p in peer.paths]
+    whole = plan(
+        hyps, MODELS, SENSOR, WORKSPACE, (100.0, 0.0), dataclasses.replace(config, budget_work=None)
+    )
+    assert not whole.truncated and "information gain" not in (whole.note or "")
+
+
 def test_a_work_budget_gives_the_same_plan_however_slow_the_machine():
     """The same plan, also when the clock runs 50 times slower (a loaded machine)."""
     hyps = [hyp("square", 1.5 * i, 0.8 * i, cls=i, p=1 / 8) for i in range(8)]
