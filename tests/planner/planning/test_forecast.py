@@ -248,6 +248,26 @@ def test_where_the_outcome_model_is_sure_its_ranking_stands(monkeypatch):
     assert not asked
 
 
+def test_with_exact_sensing_the_outcome_models_ranking_stands(monkeypatch):
+    """Exact sensing: the outcome model's uncertain zones are its rounding slack,
+    so ``lookahead`` keeps its ranking even where it calls an outcome of its best
+    path uncertain, and the recognition is not asked."""
+    from planner.planning import forecast
+    from planner.planning.outcomes import Outcomes
+
+    session = touched("thesis_like", BOUNDS[0], 3, 2)
+    assert session.status == "ambiguous"
+    asked = []
+    judge = forecast.recognition_ranking
+    monkeypatch.setattr(
+        plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
+    )
+    monkeypatch.setattr(Outcomes, "uncertain_on", lambda o, rows: np.ones_like(o.hit[rows]))
+    found = plan_session(session, SENSOR, StrategyConfig(budget_ms=None), 0)
+    assert found.paths and found.paths[0].scored_by == "outcome_model"
+    assert not asked
+
+
 def test_outcomes_apart_measures_in_error_bounds():
     from types import SimpleNamespace
 
