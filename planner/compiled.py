@@ -25,7 +25,13 @@ import numba
 import numpy as np
 from numpy.typing import DTypeLike
 
-__all__ = ["c_array", "outward", "segment_gap"]
+__all__ = ["SQUARE_SCREEN", "c_array", "outward", "segment_gap"]
+
+
+#: Relative margin within which a squared length does not decide a comparison that
+#: the rounded length (hypot) decides: kernels compare squares first and take hypot
+#: only for the near-ties, with the same answers as hypot alone.
+SQUARE_SCREEN = 1e-9
 
 
 def c_array(a: np.ndarray | float, dtype: DTypeLike = None) -> np.ndarray:

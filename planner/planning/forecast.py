@@ -151,6 +151,11 @@ class RecognitionRanking:
     expected_classes: np.ndarray
     current: int
 
+    @property
+    def useful(self) -> np.ndarray:
+        """(n,) bool: the judged paths predicted to leave fewer classes."""
+        return self.expected_classes < self.current - 1e-9
+
 
 def recognition_ranking(
     session: Session,

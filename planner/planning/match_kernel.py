@@ -4,8 +4,9 @@
 same hit on a path. A slot's point lies at its distance `d` along the path, or
 off the path by its closest approach (a near miss): either way two points are at
 least as far apart as their distances along it. Sorted by `d`, each slot needs
-testing only against the slots ahead of it within its reach plus the largest
-reach on the path: a sweep that tests those pairs with :func:`slots_match`'s
+testing only against the slots ahead of it within twice the largest reach on the
+path (a window that only moves forward, so its pairs are counted in one pass):
+a sweep that tests those pairs with :func:`slots_match`'s
 formula and sets both owners' bits. Slots with no distance along the path are
 tested against every hit. When the reaches are wide next to the spread of the
 hits, the sweep tests nearly every pair; :func:`window_pairs` says how many it
@@ -57,7 +58,7 @@ def _window_pairs(hit, d, reach, band):  # type: ignore[no-untyped-def]
         top = _largest(reach[c], on)
         end = 0
         for a in range(len(on)):
-            limit = d[c, on[a]] + reach[c, on[a]] + top + band
+            limit = d[c, on[a]] + 2 * top + band
             end = max(end, a + 1)
             while end < len(on) and d[c, on[end]] <= limit:
                 end += 1
@@ -122,7 +123,7 @@ def _pair_rows(hit, d, x, y, cos, sin, reach, alpha, cos_a, sin_a, owner, band, 
         out = rows[c]
         for i in range(n_on):
             _set(out, who[i], who[i])
-            limit = dist[i] + f[i, 4] + top + band
+            limit = dist[i] + 2 * top + band
             for j in range(i + 1, n_on):
                 if dist[j] > limit:
                     break

@@ -20,7 +20,7 @@ import math
 import numba
 import numpy as np
 
-from planner.compiled import c_array, segment_gap
+from planner.compiled import SQUARE_SCREEN, c_array, segment_gap
 
 __all__ = ["closest_vertices", "crossings", "near_stretches"]
 
@@ -141,11 +141,6 @@ def near_stretches(
     return out
 
 
-#: Relative margin within which a squared length does not decide a comparison
-#: that the rounded length (hypot) decides.
-_SCREEN = 1e-9
-
-
 @numba.njit(cache=True, nogil=True)
 def _closest(sx, sy, valid, tol, ox, oy, px, py, pairs, out_k, out_gap):  # type: ignore[no-untyped-def]
     for e in range(pairs.shape[0]):
@@ -158,12 +153,12 @@ def _closest(sx, sy, valid, tol, ox, oy, px, py, pairs, out_k, out_gap):  # type
                 continue
             vx, vy = sx[h, j] - px[c, h], sy[h, j] - py[c, h]
             sq = vx * vx + vy * vy
-            if sq <= zone * (1 - _SCREEN) or (
-                sq <= zone * (1 + _SCREEN) and math.hypot(vx, vy) <= tol[h]
+            if sq <= zone * (1 - SQUARE_SCREEN) or (
+                sq <= zone * (1 + SQUARE_SCREEN) and math.hypot(vx, vy) <= tol[h]
             ):
                 continue  # within the contact's own vertex zone
             gx, gy = segment_gap(sx[h, j], sy[h, j], ox[c], oy[c], px[c, h], py[c, h])
-            if gx * gx + gy * gy > best * best * (1 + _SCREEN):
+            if gx * gx + gy * gy > best * best * (1 + SQUARE_SCREEN):
                 continue
             gap = math.hypot(gx, gy)
             if gap < best:

@@ -370,15 +370,14 @@ def _by_recognition(
     predicts no path changes the classes."""
     why = why or ranking.note
     judged = recognition_ranking(session, found, budget, until_sure=True)
-    rest = [planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
-    paths = _recognition_paths(found, judged, ranking, config, rest)
-    if not paths or paths[0].scored_by != "recognition":
+    if not judged.useful.any():
         note = (
             f"{why}; the recognition predicts {judged.current} classes after each "
             f"of the {len(judged.rows)} paths it judged"
         )
         return [], note
-    return paths, _ranked_note(why, judged)
+    rest = [planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
+    return _recognition_paths(found, judged, ranking, config, rest), _ranked_note(why, judged)
 
 
 def _recognition_paths(
@@ -391,7 +390,7 @@ def _recognition_paths(
     """The judged paths predicted to leave fewer classes, best first, scored by the
     recognition (its P(DM) is the forecast of the first `config.forecast`), then
     the paths of `rest` (the outcome model's ranking) not among them."""
-    useful = judged.expected_classes < judged.current - 1e-9
+    useful = judged.useful
     mine = [
         dataclasses.replace(
             planned(found, int(i), ranking, family="partial"),
@@ -408,7 +407,7 @@ def _recognition_paths(
 
 def _ranked_note(why: str | None, judged: RecognitionRanking) -> str:
     """Why the recognition ranked the paths, and what it predicts of the first."""
-    useful = judged.expected_classes < judged.current - 1e-9
+    useful = judged.useful
     return (
         f"{why}: ranked on the recognition's predictions (classes "
         f"{judged.current} -> {judged.expected_classes[useful][0]:.2f} expected, "

@@ -184,10 +184,8 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         note = "; ".join(
             filter(None, [note, "search stopped at the budget: ranked by information gain"])
         )
-        cost = combined_objective(
-            -information_gain(ctx.table), ctx.motion, ctx.config.motion_weight
-        )
-        keys = (ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok])
+        order = _greedy_order(ctx, ok, information_gain(ctx.table))
+        return Ranking(order, result.value, result.exact, result.truncated, note)
     return Ranking(ok[_order(keys)], result.value, result.exact, result.truncated, note)
 
 
@@ -204,11 +202,14 @@ def _optimal(ctx: _Context) -> Ranking:
 
 
 def _greedy(ctx: _Context, score: np.ndarray) -> Ranking:
-    """Informative paths by `score` (largest first), less motion-weighted; ties to the
+    return _unscored(ctx, _greedy_order(ctx, _informative(ctx), score))
+
+
+def _greedy_order(ctx: _Context, ok: np.ndarray, score: np.ndarray) -> np.ndarray:
+    """The paths `ok` by `score` (largest first), less motion-weighted; ties to the
     larger P(DM), then the shorter motion."""
-    ok = _informative(ctx)
     cost = combined_objective(-score, ctx.motion, ctx.config.motion_weight)
-    return _unscored(ctx, ok[_order((ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok]))])
+    return ok[_order((ctx.motion[ok], -ctx.info.p_distinguishing[ok], cost[ok]))]
 
 
 def _ec2(ctx: _Context) -> Ranking:

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 import numba
 import numpy as np
 
-from planner.compiled import c_array, segment_gap
+from planner.compiled import SQUARE_SCREEN, c_array, segment_gap
 from planner.planning.cast_faces import CastFaces, angle_cone, segment_distance
 from planner.planning.near_kernel import closest_vertices, near_stretches
 
@@ -224,7 +224,7 @@ def _stretch_kernel(  # type: ignore[no-untyped-def]
                 ):
                     continue  # farther than `reach`
                 gx, gy = segment_gap(px, py, sx[row, j], sy[row, j], ex[row, j], ey[row, j])
-                if gx * gx + gy * gy > pad * pad * (1 + 1e-9):
+                if gx * gx + gy * gy > pad * pad * (1 + SQUARE_SCREEN):
                     continue  # farther than `reach` (squares decide all but near-ties)
                 d = math.hypot(gx, gy)
                 nearest = min(nearest, d)

@@ -212,13 +212,17 @@ def clear_paths(
         ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
         for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
             z, n = divmod(int(kind), steps)
-            crossed = group.crossed(lines[sel], floor * 1.15 ** float(n), z)
+            crossed = group.crossed(lines[sel], floor * _TOL_RATIO ** float(n), z)
             keep[i[sel[crossed]]] = False
     return keep
 
 
+#: Ratio of the geometric grid the free-space shrinks are rounded onto.
+_TOL_RATIO = 1.15
+
+
 def _tol_step(tol: np.ndarray, floor: float) -> np.ndarray:
-    """Tolerances rounded UP onto the geometric grid ``floor * 1.15 ** n`` (sound: a
-    larger shrink is more lenient): each one's step n (>= 0)."""
+    """Tolerances rounded UP onto the geometric grid ``floor * _TOL_RATIO ** n``
+    (sound: a larger shrink is more lenient): each one's step n (>= 0)."""
     tol = np.maximum(tol, floor)
-    return np.ceil(np.log(tol / floor) / math.log(1.15) - SHARE_SLACK).astype(np.int64)
+    return np.ceil(np.log(tol / floor) / math.log(_TOL_RATIO) - SHARE_SLACK).astype(np.int64)

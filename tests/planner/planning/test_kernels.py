@@ -74,4 +74,15 @@ def test_the_sweep_sets_exactly_the_matching_pairs(seed, n_items):
         expected[c, owner[i], owner[j]] = True
     found = (rows[..., 0][..., None] >> np.arange(n_hyp, dtype=np.uint64)) & np.uint64(1)
     np.testing.assert_array_equal(found.astype(bool), expected)
-    assert window_pairs(hit, d, reach, 1e-9) <= n_items * n_items
+    # the pairs the sweep tests: each slot along the path with those ahead of it
+    # within twice the path's largest reach, the others with every hit slot
+    count = 0
+    for c in range(2):
+        on = np.flatnonzero(hit[c] & np.isfinite(d[c]))
+        off = int((hit[c] & ~np.isfinite(d[c])).sum())
+        top = reach[c, on].max(initial=0.0)
+        for i in on:
+            ahead = (d[c, on] > d[c, i]) | ((d[c, on] == d[c, i]) & (on > i))
+            count += int((ahead & (d[c, on] <= d[c, i] + 2 * top + 1e-9)).sum())
+        count += off * (len(on) + off)
+    assert window_pairs(hit, d, reach, 1e-9) == count
