@@ -276,8 +276,9 @@ def predictions() -> Iterator[None]:
 
 def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> Session | None:
     """The session once it observes hypothesis `h`'s nominal outcome on candidate
-    `c` (the first hit with its posed face normal, or a miss); None when that is
-    not a valid observation."""
+    `c` (the first hit with its posed face normal, or a miss), as a prediction
+    (:meth:`Session.predict`: weighed without the residual fitness); None when
+    that is not a valid observation."""
     contact = None
     if out.hit[c, h]:
         contact = Contact(tuple(out.point[c, h].tolist()), tuple(out.normal[c, h].tolist()))
@@ -287,7 +288,7 @@ def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int
     if memo is not None and key in memo:
         return memo[key]
     try:
-        after: Session | None = session.observe(observation)
+        after: Session | None = session.predict(observation)
     except InvalidObservationError:
         after = None
     if memo is not None:

@@ -15,7 +15,9 @@ __all__ = ["RecognitionConfig"]
 class RecognitionConfig:
     """Knobs of recognition; the defaults follow DESIGN §4. `prior`: where the object
     is known to lie (:class:`~planner.types.PosePrior`; None: anywhere in the safe
-    circle)."""
+    circle). `residual_fitness` False leaves the residual fitness out of the weights
+    (:mod:`planner.recognition.weights`): what a predicted observation asks of the
+    recognition (which interpretations survive, their classes) does not need it."""
 
     max_outliers: int = 0
     outlier_probability: float = 0.05
@@ -26,6 +28,7 @@ class RecognitionConfig:
     require_inside_workspace: bool = True
     normal_z_error: float = 0.1
     prior: PosePrior | None = None
+    residual_fitness: bool = True
 
     def __post_init__(self) -> None:
         if self.max_outliers < 0:

@@ -20,6 +20,7 @@ the last observation.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Iterable, Sequence
 from dataclasses import dataclass
@@ -139,12 +140,23 @@ class Session:
     def observe(self, observation: Observation) -> Session:
         """The session after one more observation (the tree is extended, not rebuilt).
         Refuses a path height some object has no slice at."""
+        return self._after(observation, self.config)
+
+    def predict(self, observation: Observation) -> Session:
+        """The session after an observation a plan predicts (:mod:`planner.planning.
+        forecast`): as :meth:`observe`, its weights without the residual fitness
+        (a third of an update). What a prediction asks (which interpretations
+        survive, their classes, the bound) depends on it only through the order in
+        which the equivalence picks its leaders."""
+        return self._after(observation, dataclasses.replace(self.config, residual_fitness=False))
+
+    def _after(self, observation: Observation, config: RecognitionConfig) -> Session:
         check_height(self.models, observation.path.height)
         return Session(
             self.given_models,
             self.sensor,
             self.workspace,
-            self.config,
+            config,
             (*self.observations, observation),
             accuracy=self.accuracy,
             _parent=self,

@@ -49,14 +49,15 @@ def residual_fitness(
     the contacts as measured over that with the contacts moved onto the fitted
     faces, times, for samples the checks kept (`ok` (N,)), the share of that set
     which also keeps every contact on its finite face and every path clear of the
-    outline. 1 for slide-family samples and in `thesis` mode. `face`, `assigned`
+    outline. 1 for slide-family samples, in `thesis` mode and where the `config`
+    leaves it out (a prediction). `face`, `assigned`
     (K, s) are the rows the samples were drawn from.
     """
     fit, faces = pose.fit, group.stable.all_faces
     src = samples.src
     fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
     det, at, pos = determined_rows(fit, src)
-    if config.bound_mode == "thesis" or det.size == 0:
+    if config.bound_mode == "thesis" or not config.residual_fitness or det.size == 0:
         return fitness
     fitness[at] = _fitness(
         points, normals, faces, face[det], assigned[det], fit.theta[det], fit.t[det], eps_d, phi

@@ -185,3 +185,29 @@ def test_the_interpretation_work_is_known_before_any_interpretation_is_checked(o
         left = sum(len(r) for r in s._derived.level.rows)
         assert s.interpretation_work == left * (contacts + config.max_family_samples) <= work
         assert "_extended" not in s.__getstate__()
+
+
+def test_a_prediction_keeps_what_the_update_keeps_weighed_without_the_residual_fitness():
+    """A predicted observation prunes as the update does (the residual fitness only
+    weighs): the same interpretations with the same poses and bounds survive; the
+    weights differ where the fitness is below one."""
+    from hardware_sim.world import random_world
+
+    models, bounds = object_set("workshop"), SensorBounds(1.0, math.radians(3.0))
+    rng = np.random.default_rng(5)
+    reweighed = 0
+    for _ in range(4):
+        world = random_world(models, WORKSPACE, rng)
+        session = Session(models, bounds, WORKSPACE)
+        for _ in range(3):
+            obs, _ = world.execute(world.hitting_path(rng), bounds, rng)
+            observed, predicted = session.observe(obs), session.predict(obs)
+            assert predicted.config.residual_fitness is False
+            kept = {(h.interpretation, h.pose, h.error_bound): h for h in observed.hypotheses}
+            guess = {(h.interpretation, h.pose, h.error_bound): h for h in predicted.hypotheses}
+            assert kept.keys() == guess.keys() and kept
+            reweighed += any(
+                not math.isclose(kept[k].probability, guess[k].probability) for k in kept
+            )
+            session = observed
+    assert reweighed  # the fitness was left out somewhere it mattered
