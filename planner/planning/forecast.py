@@ -131,12 +131,18 @@ def with_forecast(
     )
 
 
-#: Most candidate paths, and most classes, the recognition is asked about when the
-#: outcome model calls every candidate uninformative (one update per pair), and
-#: how many times as many paths while none of them is predicted to change anything.
+#: Most candidate paths, and most classes, the recognition is asked about (one
+#: update per pair), and how many times as many paths while none of them is
+#: predicted to change anything. Where the outcome model calls every candidate
+#: uninformative the recognition's ranking is all the plan has, and it judges
+#: `SHORTLIST_CLASSES_ALONE` classes (near twins: four objects in two turns each).
 SHORTLIST = 8
 SHORTLIST_CLASSES = 4
+SHORTLIST_CLASSES_ALONE = 8
 SHORTLIST_ROUNDS = 4
+#: How far a forecast from the most probable classes alone may stray from one over
+#: every class: the share of the weight the classes left out may hold.
+FORECAST_SLACK = 0.01
 
 
 @dataclass(frozen=True, eq=False)
@@ -144,12 +150,21 @@ class RecognitionRanking:
     """What the recognition predicts of the shortlisted candidates `rows` (best
     first): `p_distinguishing` (the class-weighted share of predicted outcomes that
     leave one class) and `expected_classes` (classes left, class-weighted), against
-    the `current` number of classes."""
+    the `current` number of classes; the classes predicted (the most probable,
+    their weights renormalized) hold the share `covered` of the class weight."""
 
     rows: np.ndarray
     p_distinguishing: np.ndarray
     expected_classes: np.ndarray
     current: int
+    covered: float = 1.0
+
+    @property
+    def forecasts(self) -> bool:
+        """`p_distinguishing` is the forecast within `FORECAST_SLACK`: the classes
+        left out hold at most that share of the weight (renormalized, the sample
+        would overstate the forecast by up to their share)."""
+        return self.covered >= 1.0 - FORECAST_SLACK
 
     @property
     def useful(self) -> np.ndarray:
@@ -163,6 +178,7 @@ def recognition_ranking(
     budget: Budget | None = None,
     first: Sequence[int] = (),
     until_sure: bool = False,
+    classes: int = SHORTLIST_CLASSES,
 ) -> RecognitionRanking:
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
@@ -177,11 +193,12 @@ def recognition_ranking(
     many) while none is predicted to change the classes. Candidates `first` are
     judged before the shortlist. With `until_sure` the judging stops at the first
     path predicted to leave one class whatever the truth: nothing judged after it
-    can rank above it (the paths below it are then not all judged)."""
+    can rank above it (the paths below it are then not all judged). The most
+    probable `classes` classes predict."""
     budget = budget or Budget()
     posed, out, cands = found.posed, found.outcomes, found.candidates
     current = posed.n_classes
-    top = np.argsort(-posed.class_weight, kind="stable")[:SHORTLIST_CLASSES]
+    top = np.argsort(-posed.class_weight, kind="stable")[:classes]
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
     best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
     # the paths aimed at the classes' differences in the order they were made (one
@@ -220,6 +237,7 @@ def recognition_ranking(
         np.array(p_dm)[rank],
         np.array(expected)[rank],
         current,
+        float(posed.class_weight[top].sum() / posed.class_weight.sum()),
     )
 
 

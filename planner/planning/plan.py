@@ -29,6 +29,7 @@ from planner.planning.analysis import Analysis, analyse, as_generator, models_by
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import (
+    SHORTLIST_CLASSES_ALONE,
     RecognitionRanking,
     predictions,
     recognition_ranking,
@@ -369,7 +370,9 @@ def _by_recognition(
     settles every truth; then the outcome model's. None when the recognition
     predicts no path changes the classes."""
     why = why or ranking.note
-    judged = recognition_ranking(session, found, budget, until_sure=True)
+    judged = recognition_ranking(
+        session, found, budget, until_sure=True, classes=SHORTLIST_CLASSES_ALONE
+    )
     if not judged.useful.any():
         note = (
             f"{why}; the recognition predicts {judged.current} classes after each "
@@ -388,13 +391,15 @@ def _recognition_paths(
     rest: Sequence[PlannedPath] = (),
 ) -> list[PlannedPath]:
     """The judged paths predicted to leave fewer classes, best first, scored by the
-    recognition (its P(DM) is the forecast of the first `config.forecast`), then
-    the paths of `rest` (the outcome model's ranking) not among them."""
+    recognition (where the classes it predicted hold nearly all the weight, its
+    P(DM) is the forecast of the first `config.forecast`; from fewer it could
+    overstate it, and the plan's forecast judges every class), then the paths of
+    `rest` (the outcome model's ranking) not among them."""
     useful = judged.useful
     mine = [
         dataclasses.replace(
             planned(found, int(i), ranking, family="partial"),
-            p_forecast=float(p) if k < config.forecast else None,
+            p_forecast=float(p) if k < config.forecast and judged.forecasts else None,
             scored_by="recognition",
         )
         for k, (i, p) in enumerate(

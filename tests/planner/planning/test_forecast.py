@@ -133,6 +133,44 @@ def test_with_nothing_informative_the_recognition_ranks_the_paths():
     assert first.p_forecast is not None and first.p_forecast > 0.5
 
 
+def _plate_in_eight_classes() -> Session:
+    """The twins plate touched twice from below and once from each end, away from
+    every feature: its four variants in two half-turns, eight classes alike."""
+    from planner.models.library import load_objects
+    from planner.types import Contact, Observation
+
+    session = Session(
+        load_objects("twins"), SensorBounds(1.0, math.radians(3.0)), WORKSPACE
+    )
+    for origin, direction, point, normal in [
+        ((-20, -200), (0, 1), (-20, -30), (0, -1)),
+        ((20, -200), (0, 1), (20, -30), (0, -1)),
+        ((-200, -20), (1, 0), (-60, -20), (-1, 0)),
+        ((200, -20), (-1, 0), (60, -20), (1, 0)),
+    ]:
+        path = SensingPath(origin, direction, 400.0)
+        session = session.observe(Observation(path, Contact(point, normal)))
+    return session
+
+
+@pytest.mark.parametrize("sampled", [8, 4])
+def test_where_the_recognition_ranks_alone_its_forecast_weighs_every_class(monkeypatch, sampled):
+    """Eight classes, nothing informative for the outcome model: the recognition
+    judges all eight, and the plan's p_forecast is the forecast over every class
+    (a path settling one of eight equal classes: 1/8); from a sample of four it
+    would claim 1/4 (renormalized), so the plan's forecast judges every class."""
+    monkeypatch.setattr(plan_module, "SHORTLIST_CLASSES_ALONE", sampled)
+    session = _plate_in_eight_classes()
+    assert len({h.equivalence_class for h in session.hypotheses}) == 8
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
+    first = found.paths[0]
+    assert first.scored_by == "recognition" and "no informative path" in (found.note or "")
+    with predictions():
+        whole = forecast_distinguishing(session, first.path)
+    assert whole is not None and first.p_forecast == pytest.approx(whole)
+    assert first.p_forecast == pytest.approx(1 / 8)
+
+
 def test_a_weak_best_path_gives_way_to_the_recognitions_ranking(monkeypatch):
     """When the outcome model's best path would change the hypotheses only rarely
     (under the weak share, raised here so that the ellipse after two contacts,
