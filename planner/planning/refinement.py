@@ -34,7 +34,7 @@ from planner.planning.posed_set import PosedSet
 from planner.planning.scoring import InformationScores, information_scores
 from planner.planning.survivors import pin_families
 from planner.recognition.consistent import consistent_set_bounds
-from planner.recognition.pose_fit import fit_batch, noise_scales, point_bounds, worst_case_bounds
+from planner.recognition.pose_fit import fit_batch, noise_scales, point_bounds, worst_rotation
 from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds, StablePose
 
 __all__ = ["Refinement", "refinement", "scores_after"]
@@ -158,7 +158,7 @@ def refinement(
                 samples=_SWEEP_SAMPLES,
             )
             eps_t = 2 * np.minimum(moved + second, swept.moved).max(axis=1)
-            d_theta = worst_case_bounds(fit.sens[det], assigned[det], eps_d, phi)[1]
+            d_theta = worst_rotation(fit.sens[det], assigned[det], eps_d, phi)
             d_theta = np.minimum(d_theta * (1 + phi) + phi**2, swept.dtheta)
             rows = (c_idx[det], k_idx[det])
             after[rows] = np.minimum(after[rows], eps_t)

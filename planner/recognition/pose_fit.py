@@ -245,20 +245,15 @@ def _pose_covariance(
     return np.linalg.inv(info_pose)
 
 
-def worst_case_bounds(
-    sens: np.ndarray, assigned: np.ndarray, eps_d: float, phi: float
-) -> tuple[np.ndarray, np.ndarray]:
-    """Worst-case |dq| and |dtheta| (K,) from the sensitivities (first order).
+def worst_rotation(sens: np.ndarray, assigned: np.ndarray, eps_d: float, phi: float) -> np.ndarray:
+    """Worst-case |dtheta| (K,) from the sensitivities (first order).
 
-    Each contact's position error lies in a disk of radius eps_d (operator norm of
-    the 2x2 block) and its normal angle error within ±phi; the worst case adds
-    every contribution in absolute value.
+    Each contact's position error lies in a disk of radius eps_d and its normal
+    angle error within ±phi; the worst case adds every contribution in absolute
+    value. (A point's worst move is :func:`point_bounds`'.)
     """
-    pos_block = sens[..., :2, :2]
-    pos_norm = np.linalg.norm(pos_block, ord=2, axis=(-2, -1))
-    dq = eps_d * pos_norm + phi * np.hypot(sens[..., 0, 2], sens[..., 1, 2])
     dth = eps_d * np.hypot(sens[..., 2, 0], sens[..., 2, 1]) + phi * np.abs(sens[..., 2, 2])
-    return (dq * assigned).sum(axis=1), (dth * assigned).sum(axis=1)
+    return (dth * assigned).sum(axis=1)
 
 
 def point_bounds(

@@ -31,7 +31,7 @@ from planner.recognition.pose_fit import (
     fit_batch,
     noise_scales,
     point_bounds,
-    worst_case_bounds,
+    worst_rotation,
 )
 from planner.types import Faces, StablePose
 
@@ -196,7 +196,7 @@ def fit_bounds(
     fit = pose.fit
     r_c = shapes.centroid_radius
     if config.bound_mode != "thesis":
-        _, d_th = worst_case_bounds(fit.sens, assigned, eps_d, phi)
+        d_th = worst_rotation(fit.sens, assigned, eps_d, phi)
         # second-order allowance for the linearization: rotations by up to phi
         second = (phi**2) * r_c + phi * eps_d
         d_th = d_th * (1 + phi) + phi**2

@@ -139,9 +139,7 @@ def _plate_in_eight_classes() -> Session:
     from planner.models.library import load_objects
     from planner.types import Contact, Observation
 
-    session = Session(
-        load_objects("twins"), SensorBounds(1.0, math.radians(3.0)), WORKSPACE
-    )
+    session = Session(load_objects("twins"), SensorBounds(1.0, math.radians(3.0)), WORKSPACE)
     for origin, direction, point, normal in [
         ((-20, -200), (0, 1), (-20, -30), (0, -1)),
         ((20, -200), (0, 1), (20, -30), (0, -1)),
