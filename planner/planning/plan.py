@@ -321,9 +321,10 @@ def _unless_predicted_better(
     paths: list[PlannedPath],
 ) -> tuple[list[PlannedPath], str | None]:
     """The outcome model's ranked `paths`, unless the model is unsure of some
-    outcome of its best path and the recognition, judging that path before its
-    shortlist, predicts a path of the shortlist does better: a larger P(DM), or
-    as large and fewer classes expected. Where the model is sure of every outcome
+    outcome of its best path (or counts a group of several classes no path
+    splits as done: :func:`_settles_short`) and the recognition, judging that path
+    before its shortlist, predicts a path of the shortlist does better: a larger
+    P(DM), or as large and fewer classes expected. Where the model is sure of every outcome
     it is the recognition's nominal prediction looked at two touches deep, and its
     ranking stands; so it does with exact sensing, where the model's uncertain
     zones are the rounding slack and the pose bounds of classes the recognition's
@@ -332,7 +333,7 @@ def _unless_predicted_better(
     sensor = session.working_sensor
     if sensor.position_error == 0 and sensor.normal_error == 0:
         return paths, ranking.note  # exact sensing: the model's zones are rounding only
-    if not found.outcomes.uncertain_on(best).any():
+    if not found.outcomes.uncertain_on(best).any() and not _settles_short(found, ranking, best):
         return paths, ranking.note  # the model is sure of every outcome: it stands
     if budget.exhausted():
         return paths, ranking.note  # only the best path would be judged: no other to take
@@ -352,6 +353,17 @@ def _unless_predicted_better(
     )
     return _recognition_paths(found, judged, ranking, config, paths), "; ".join(
         filter(None, [_ranked_note(why, judged), ranking.note])
+    )
+
+
+def _settles_short(found: Analysis, ranking: Ranking, best: int) -> bool:
+    """Does the model's value of path `best` count groups of several classes done?
+    Every outcome ends in a group no candidate splits (one touch expected) though
+    not every one in one class (P(DM) < 1): the recognition, which prunes more
+    finely, may split them, or not."""
+    return bool(
+        found.info.p_distinguishing[best] < 1 - 1e-9
+        and ranking.expected_remaining[best] <= 1 + 1e-9
     )
 
 

@@ -265,6 +265,57 @@ def test_a_plan_whose_budget_is_spent_does_not_ask_the_recognition(monkeypatch):
     assert not asked
 
 
+def _block_in_four_classes() -> Session:
+    """The bump block of Exp. II touched twice at the 5-degree sensor (world 184 of
+    the README's column, as ``optimal`` touched it): four classes left."""
+    from planner.models.library import load_objects
+    from planner.types import Contact, Observation, Workspace
+
+    session = Session(
+        load_objects("bump_block"), SensorBounds(1.0, math.radians(5)), Workspace((0, 0), 200)
+    )
+    taken = [
+        (
+            (200.0, 0.0), (-1.0, 0.0), 400.0,
+            ((41.9311906, -0.0351444), (0.9702907, -0.2419422)),
+        ),
+        (
+            (49.0614835, 193.8890684), (-0.2419422, -0.9702907), 399.9975922,
+            ((12.7703057, 48.0972761), (0.2256881, 0.9741996)),
+        ),
+    ]  # fmt: skip
+    for origin, direction, length, contact in taken:
+        session = session.observe(
+            Observation(SensingPath(origin, direction, length), Contact(*contact))
+        )
+    return session
+
+
+def test_a_best_path_valued_on_groups_it_cannot_split_is_judged(monkeypatch):
+    """``optimal``'s best path: the model is sure of every outcome, but values it one
+    touch because each outcome ends in a group of classes no candidate splits
+    (P(DM) 0). The recognition judges it, predicts it leaves two classes of four,
+    and a path leaving 1.69 replaces it; without the rule the model's path stands
+    and the recognition is not asked."""
+    session = _block_in_four_classes()
+    assert len({h.equivalence_class for h in session.hypotheses}) == 4
+    asked = []
+    judge = plan_module.recognition_ranking
+    monkeypatch.setattr(
+        plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
+    )
+    where, config = (49.06, 193.89), StrategyConfig(name="optimal", budget_ms=None)
+    found = plan_session(session, where, config, 0)
+    assert "predicts a better path than the outcome model's best" in (found.note or "")
+    assert found.paths[0].scored_by == "recognition"
+    asked.clear()
+    monkeypatch.setattr(plan_module, "_settles_short", lambda *a: False)
+    plain = plan_session(session, where, config, 0)
+    assert not asked and plain.paths[0].scored_by == "outcome_model"
+    assert plain.paths[0].expected_remaining == pytest.approx(1.0)
+    assert plain.paths[0].p_distinguishing < 1
+
+
 def test_where_the_outcome_model_is_sure_its_ranking_stands(monkeypatch):
     """The same scene, with the outcome model made sure of every outcome: its best
     path is the recognition's nominal prediction looked at two touches deep, so
