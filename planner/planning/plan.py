@@ -323,12 +323,14 @@ def _unless_predicted_better(
     """The outcome model's ranked `paths`, unless the model is unsure of some
     outcome of its best path (or counts a group of several classes no path
     splits as done: :func:`_settles_short`) and the recognition, judging that path
-    before its shortlist, predicts a path of the shortlist does better: a larger
-    P(DM), or as large and fewer classes expected. Where the model is sure of every outcome
-    it is the recognition's nominal prediction looked at two touches deep, and its
-    ranking stands; so it does with exact sensing, where the model's uncertain
-    zones are the rounding slack and the pose bounds of classes the recognition's
-    four-class sample may not see (measured: README, Table 4.1 analog)."""
+    before its shortlist, predicts a path of the shortlist does better: a smaller
+    expected log of the classes left, or as small and a larger P(DM), or as large
+    and fewer classes expected (:class:`RecognitionRanking`). Where the model is
+    sure of every outcome it is the recognition's nominal prediction looked at two
+    touches deep, and its ranking stands; so it does with exact sensing, where the
+    model's uncertain zones are the rounding slack and the pose bounds of classes
+    the recognition's four-class sample may not see (measured: README, Table 4.1
+    analog)."""
     best = int(ranking.order[0])
     sensor = session.working_sensor
     if sensor.position_error == 0 and sensor.normal_error == 0:
@@ -343,8 +345,12 @@ def _unless_predicted_better(
     at = int(np.flatnonzero(judged.rows == best)[0])  # the first path is always judged
     p_best, e_best = judged.p_distinguishing[at], judged.expected_classes[at]
     p_top, e_top = judged.p_distinguishing[0], judged.expected_classes[0]
+    l_best, l_top = judged.expected_log[at], judged.expected_log[0]
     # ahead by more than rounding, not by the last bits of a weighted sum
-    better = p_top > p_best + 1e-9 or (p_top > p_best - 1e-9 and e_top < e_best - 1e-9)
+    better = l_top < l_best - 1e-9 or (
+        l_top < l_best + 1e-9
+        and (p_top > p_best + 1e-9 or (p_top > p_best - 1e-9 and e_top < e_best - 1e-9))
+    )
     if not better:
         return paths, ranking.note
     why = (
@@ -377,9 +383,9 @@ def _by_recognition(
 ) -> tuple[list[PlannedPath], str | None]:
     """No candidate informative for the outcome model (or only weakly: `why`, by
     default the ranking's note): the shortlisted paths after which the
-    recognition predicts fewer classes, best first (P(DM) by the recognition,
-    then expected classes left), scored by the recognition, judged until one
-    settles every truth; then the outcome model's. None when the recognition
+    recognition predicts fewer classes, best first (:class:`RecognitionRanking`),
+    scored by the recognition, judged until one settles every truth; then the
+    outcome model's. None when the recognition
     predicts no path changes the classes."""
     why = why or ranking.note
     judged = recognition_ranking(

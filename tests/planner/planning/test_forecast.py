@@ -454,3 +454,35 @@ def test_a_forecast_the_budget_cannot_finish_is_not_begun():
     short = Budget(work=(classes - 1) * each - 1.0)
     assert forecast_distinguishing(session, path, short) is None
     assert short.units == 0.0 and short.stopped_by == "work"
+
+
+def test_the_recognition_ranks_a_halving_path_before_one_that_settles_a_class(monkeypatch):
+    """Eight equal classes: a path that leaves four whatever the truth (log 4 nats
+    of classes left) ranks before one that settles one truth and leaves seven for
+    the rest (P(DM) 1/8, 7/8 log 7), though the second has the larger P(DM)."""
+    from planner.planning import forecast
+    from planner.planning.analysis import analyse
+
+    session = _plate_in_eight_classes()
+    found = analyse(
+        session.hypotheses, session.models, session.working_sensor, session.workspace,
+        (200.0, 0.0), StrategyConfig(),
+    )  # fmt: skip
+    calls: dict[int, int] = {}
+    order: list[int] = []
+
+    def classes_after(session, path, out, c, h):
+        calls[c] = calls.get(c, 0) + 1
+        if c not in order:
+            order.append(c)
+        if order.index(c) == 0:  # the first path judged settles the first truth
+            return 1 if calls[c] == 1 else 7
+        return 4 if order.index(c) == 1 else 8  # the second halves; the rest nothing
+
+    monkeypatch.setattr(forecast, "_classes_after", classes_after)
+    ranking = forecast.recognition_ranking(session, found, classes=8)
+    peel, halve = order[0], order[1]
+    assert ranking.rows[0] == halve and ranking.rows[1] == peel
+    assert ranking.p_distinguishing[1] == pytest.approx(1 / 8)
+    assert ranking.expected_log[0] == pytest.approx(math.log(4))
+    assert ranking.expected_log[1] == pytest.approx(7 / 8 * math.log(7))
