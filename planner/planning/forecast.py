@@ -161,9 +161,9 @@ class RecognitionRanking:
     rows: np.ndarray
     p_distinguishing: np.ndarray
     expected_classes: np.ndarray
+    expected_log: np.ndarray
     current: int
-    covered: float = 1.0
-    expected_log: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0))
+    covered: float
 
     @property
     def forecasts(self) -> bool:
@@ -238,18 +238,17 @@ def recognition_ranking(
         logs.append(float(weight @ np.log(left)))
         if until_sure and expected[-1] <= 1 + 1e-9:
             break  # it settles every truth: nothing judged later can rank above it
-    rank = (
-        np.lexsort((np.array(expected), -np.array(p_dm), np.round(np.array(logs), 9)))
-        if rows
-        else np.zeros(0, int)
-    )
+    # the logarithms tie to 9 decimals (halving paths alike); P(DM) and the classes
+    # keep their last bits, which order the likelier classes' paths first
+    keys = (np.array(expected), -np.array(p_dm), np.round(np.array(logs), 9))
+    rank = np.lexsort(keys) if rows else np.zeros(0, int)
     return RecognitionRanking(
         np.array(rows, dtype=int)[rank],
         np.array(p_dm)[rank],
         np.array(expected)[rank],
+        np.array(logs)[rank],
         current,
         float(posed.class_weight[top].sum() / posed.class_weight.sum()),
-        np.array(logs)[rank],
     )
 
 

@@ -50,8 +50,8 @@ def residual_fitness(
     faces, times, for samples the checks kept (`ok` (N,)), the share of that set
     which also keeps every contact on its finite face and every path clear of the
     outline. 1 for slide-family samples, in `thesis` mode and where the `config`
-    leaves it out (a prediction). `face`, `assigned`
-    (K, s) are the rows the samples were drawn from.
+    leaves it out (a prediction). `face`, `assigned` (K, s) are the rows the
+    samples were drawn from.
     """
     fit, faces = pose.fit, group.stable.all_faces
     src = samples.src
