@@ -61,6 +61,9 @@ LEAVES = ("touch", "entropy")
 #: (paths x members x words) one batch of them may take; children of root paths
 #: valued together when the search is two touches deep.
 _BATCH = 64
+#: Root paths whose bound is within this of the cutoff are still valued: equal values
+#: are ranked by P(DM), information gain and motion, not by which was valued first.
+TIE = 1e-9
 _BATCH_ELEMENTS = 2_000_000
 _GROUP = 256
 
@@ -242,7 +245,9 @@ class _Search:
         best: list[float] = []  # sorted exact objectives found so far
         truncated = False
         for c in order:
-            threshold = _kth_best(best, top_k)
+            # a path whose bound only ties the cutoff is valued too: it may tie the
+            # best, and ties are decided by the keys after the value
+            threshold = _kth_best(best, top_k) + TIE
             if _reaches(node.bound[c] + extra[c], threshold):
                 continue
             try:
@@ -274,7 +279,7 @@ class _Search:
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
         while lo < len(order):
-            threshold = _kth_best(best, top_k)
+            threshold = _kth_best(best, top_k) + TIE
             picked: list[int] = []
             children = 0
             while lo < len(order) and (not picked or children < _GROUP):

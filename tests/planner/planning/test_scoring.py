@@ -215,6 +215,32 @@ def test_top_k_search_keeps_the_best_exact(table, top_k):
     assert np.all(pruned.value <= full.value + 1e-9)  # the rest keep lower bounds
 
 
+@settings(max_examples=40, deadline=None)
+@given(random_tables(max_classes=6, max_paths=6), st.integers(1, 3), st.sampled_from([2, None]))
+def test_top_k_search_values_every_path_that_ties_the_cutoff(table, top_k, depth):
+    # a path whose value equals the top_k-th best is valued exactly, not left at a
+    # bound that ties: equal values are ranked by P(DM), gain and motion, not by
+    # which path the search happened to value first
+    full = expected_remaining(table, depth)
+    pruned = expected_remaining(table, depth, top_k=top_k)
+    finite = np.sort(full.value[np.isfinite(full.value)])
+    assume(len(finite) > 0)
+    cutoff = finite[min(top_k, len(finite)) - 1]
+    tied = full.value <= cutoff + 1e-12
+    assert np.all(pruned.exact[tied])
+    np.testing.assert_allclose(pruned.value[tied], full.value[tied])
+
+
+def test_equal_paths_are_all_valued_under_top_k():
+    # five paths that each tell three classes apart: all worth one touch, all exact
+    # with top_k = 1 (the first valued used to keep the others at their bound)
+    table = SurvivorTable.from_matrix(np.stack([np.eye(3, dtype=bool)] * 5), np.ones(3) / 3)
+    for depth in (2, None):
+        found = expected_remaining(table, depth, top_k=1)
+        assert found.exact.all()
+        np.testing.assert_allclose(found.value, 1.0)
+
+
 def test_inseparable_classes_end_the_search():
     # classes 1 and 2 are confusable on every path: once they are what is left,
     # no touch can help, and the remaining count is 0, not infinity
