@@ -304,7 +304,9 @@ def test_a_best_path_valued_on_groups_it_cannot_split_is_judged(monkeypatch):
     monkeypatch.setattr(
         plan_module, "recognition_ranking", lambda *a, **k: asked.append(1) or judge(*a, **k)
     )
-    where, config = (49.06, 193.89), StrategyConfig(name="optimal", budget_ms=None)
+    # the sensor where the tied paths of least motion are ones the recognition judges
+    # weak (from where it last touched, the model's tie goes to a path that is not)
+    where, config = (-200.0, 0.0), StrategyConfig(name="optimal", budget_ms=None)
     found = plan_session(session, where, config, 0)
     assert "predicts a better path than the outcome model's best" in (found.note or "")
     assert found.paths[0].scored_by == "recognition"
