@@ -61,11 +61,11 @@ LEAVES = ("touch", "entropy")
 #: (paths x members x words) one batch of them may take; children of root paths
 #: valued together when the search is two touches deep.
 _BATCH = 64
+_BATCH_ELEMENTS = 2_000_000
+_GROUP = 256
 #: Root paths whose bound is within this of the cutoff are still valued: equal values
 #: are ranked by P(DM), information gain and motion, not by which was valued first.
 TIE = 1e-9
-_BATCH_ELEMENTS = 2_000_000
-_GROUP = 256
 
 
 @dataclass(frozen=True, eq=False)
