@@ -220,7 +220,8 @@ def test_top_k_search_keeps_the_best_exact(table, top_k):
 def test_top_k_search_values_every_path_that_ties_the_cutoff(table, top_k, depth):
     # a path whose value equals the top_k-th best is valued exactly, not left at a
     # bound that ties: equal values are ranked by P(DM), gain and motion, not by
-    # which path the search happened to value first
+    # which path the search happened to value first. Every path twice: ties forced
+    table = SurvivorTable.from_matrix(np.concatenate([table.matrix()] * 2), table.weight)
     full = expected_remaining(table, depth)
     pruned = expected_remaining(table, depth, top_k=top_k)
     finite = np.sort(full.value[np.isfinite(full.value)])
