@@ -17,7 +17,6 @@ import math
 
 import numba
 import numpy as np
-import shapely
 
 from planner.compiled import c_array, segment_gap
 from planner.geometry import (
@@ -206,13 +205,13 @@ def clear_paths(
         R = rotation_matrices(theta[i])
         a = np.einsum("nji,nj->ni", R, origin[k] - t[i])
         b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
-        lines = shapely.linestrings(np.stack([a, b], axis=1))
+        segments = np.hstack([a, b])
         # one pass per (height, shrink): the segments sorted by it and split
         kinds, which = np.unique(layer[k] * steps + step[i], return_inverse=True)
         ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
         for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
             z, n = divmod(int(kind), steps)
-            crossed = group.crossed(lines[sel], floor * _TOL_RATIO ** float(n), z)
+            crossed = group.crossed(segments[sel], floor * _TOL_RATIO ** float(n), z)
             keep[i[sel[crossed]]] = False
     return keep
 

@@ -9,7 +9,6 @@ then the model check on the fitted pose (:mod:`planner.recognition.evaluate`).
 
 from __future__ import annotations
 
-import threading
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -23,6 +22,7 @@ from planner.recognition.constraints import (
     shared_tables,
     unary_feasibility,
 )
+from planner.recognition.crossing import ring_edges, segments_meet
 from planner.types import Contact, ObjectModel, SensorBounds, StablePose
 
 __all__ = ["Group", "TreeLevel", "extend", "make_groups"]
@@ -47,14 +47,14 @@ class Group:
         heights constrain each other as faces of one rigid pose do."""
         return shared_tables(self.stable.all_faces)
 
-    def crossed(self, lines: np.ndarray, tol: float, layer: int = 0) -> np.ndarray:
-        """Which `lines` (shapely line strings, model frame) cross the outline of
-        `layer` shrunk by `tol` (a tolerance bucket). The shrunk outlines are kept
-        for the process (:data:`SHRUNK_COORDINATES`): sessions on the same parts
-        shrink each once."""
+    def crossed(self, segments: np.ndarray, tol: float, layer: int = 0) -> np.ndarray:
+        """Which `segments` ((N, 4) rows ``x0, y0, x1, y1``, model frame) meet the
+        outline of `layer` shrunk by `tol` (a tolerance bucket): cross it, touch it
+        or lie inside. The shrunk outlines' edges are kept for the process
+        (:data:`SHRUNK_EDGES`): sessions on the same parts shrink each once."""
         key = (self._layer_keys[layer], tol)
-        found = _shrunk.get(key, lambda: _Shrunk.of(self.stable.layers[layer].shape, tol))
-        return found.crossed(lines)
+        edges = _shrunk.get(key, lambda: _shrunk_edges(self.stable.layers[layer].shape, tol))
+        return segments_meet(segments, edges)
 
     @cached_property
     def _layer_keys(self) -> list[bytes]:
@@ -62,33 +62,17 @@ class Group:
         return [array_key((layer.outline, *layer.holes)) for layer in self.stable.layers]
 
 
-#: Vertices of shrunk outlines the process keeps (a few megabytes with their
-#: prepared indexes; a part shrunk at every tolerance step holds tens of thousands).
-SHRUNK_COORDINATES = 250_000
+#: Edges of shrunk outlines the process keeps (a few megabytes; a part shrunk at
+#: every tolerance step holds tens of thousands).
+SHRUNK_EDGES = 250_000
 
 
-@dataclass(frozen=True, eq=False)
-class _Shrunk:
-    """A shrunk outline, prepared, and the lock its tests take: a prepared geometry
-    builds its indexes on first use and is not safe to test from two threads at once."""
-
-    geometry: shapely.Geometry
-    lock: threading.Lock
-
-    @classmethod
-    def of(cls, shape: shapely.Geometry, tol: float) -> _Shrunk:
-        geom = shape.buffer(-tol, join_style="mitre") if tol > 0 else shape
-        shapely.prepare(geom)
-        return cls(geom, threading.Lock())
-
-    def crossed(self, lines: np.ndarray) -> np.ndarray:
-        with self.lock:
-            return shapely.intersects(lines, self.geometry)
+def _shrunk_edges(shape: shapely.Geometry, tol: float) -> np.ndarray:
+    """The ring edges of `shape` shrunk by `tol` (mitred corners)."""
+    return ring_edges(shape.buffer(-tol, join_style="mitre") if tol > 0 else shape)
 
 
-_shrunk: SharedCache[_Shrunk] = SharedCache(
-    SHRUNK_COORDINATES, lambda s: int(shapely.get_num_coordinates(s.geometry))
-)
+_shrunk: SharedCache[np.ndarray] = SharedCache(SHRUNK_EDGES, len)
 
 
 def make_groups(models: list[ObjectModel]) -> list[Group]:

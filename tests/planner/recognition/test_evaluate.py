@@ -531,27 +531,27 @@ def test_groups_evaluated_together_are_each_evaluated_alone_bit_for_bit(set_name
 
 
 def test_shrunk_outlines_are_made_once_per_part_and_tolerance_for_the_process(monkeypatch):
-    fresh = SharedCache(tree.SHRUNK_COORDINATES, lambda s: 1)
+    fresh = SharedCache(tree.SHRUNK_EDGES, lambda s: 1)
     monkeypatch.setattr(tree, "_shrunk", fresh)
     # two sessions' copies of one part
     a, b = (make_groups(object_set("thesis_like"))[0] for _ in range(2))
     assert a.stable is not b.stable
     cx, cy = a.stable.centroid
-    lines = shapely.linestrings(
-        [[[cx - 500, cy], [cx + 500, cy]], [[cx - 500, cy + 900], [cx, cy + 900]]]
+    segments = np.array([[cx - 500, cy, cx + 500, cy], [cx - 500, cy + 900, cx, cy + 900]])
+    expected = shapely.intersects(
+        shapely.linestrings(segments.reshape(-1, 2, 2)),
+        a.stable.shape.buffer(-1.0, join_style="mitre"),
     )
-    expected = shapely.intersects(lines, a.stable.shape.buffer(-1.0, join_style="mitre"))
     assert expected.tolist() == [True, False]
-    assert a.crossed(lines, 1.0).tolist() == expected.tolist() and len(fresh) == 1
-    assert b.crossed(lines, 1.0).tolist() == expected.tolist() and len(fresh) == 1
-    b.crossed(lines, 2.0)
+    assert a.crossed(segments, 1.0).tolist() == expected.tolist() and len(fresh) == 1
+    assert b.crossed(segments, 1.0).tolist() == expected.tolist() and len(fresh) == 1
+    b.crossed(segments, 2.0)
     assert len(fresh) == 2
     monkeypatch.setattr(fresh, "limit", 1)  # past the bound the least recently used go
-    b.crossed(lines, 3.0)
+    b.crossed(segments, 3.0)
     assert len(fresh) == 1
-    # one prepared outline tested from several threads at once gives the same answers
-    ends = np.random.default_rng(0).uniform(-80, 80, (400, 2, 2))
-    many = shapely.linestrings(ends + np.array([cx, cy]))
+    # one shrunk outline tested from several threads at once gives the same answers
+    many = np.random.default_rng(0).uniform(-80, 80, (400, 4)) + np.array([cx, cy, cx, cy])
     alone = a.crossed(many, 3.0)
     with ThreadPoolExecutor(4) as pool:
         answers = list(pool.map(lambda _: a.crossed(many, 3.0), range(16)))
