@@ -186,21 +186,40 @@ def _sweep(
 def _largest_moves(vx, vy, ok, angle, model_points, fit_pts, out):  # type: ignore[no-untyped-def]
     """out[k, p] = the largest ``|R(angle[k, n]) v_p + (vx, vy)[k, n, i] - fit_pts[k, p]|``
     over the rotations n and the polygon vertices i that are `ok` (left as it is
-    where none is): one pass, without the (K, N, V, P) array of displacements."""
+    where none is): one pass, without the (K, N, V, P) array of displacements.
+    Each rotated point is computed once per rotation, and the squares compared
+    (the root of the largest square is the largest root, to the bit)."""
     K, N, V = vx.shape
+    P = model_points.shape[0]
+    rx = np.empty(P)
+    ry = np.empty(P)
+    fx = np.empty(P)
+    fy = np.empty(P)
+    best = np.empty(P)
     for k in range(K):
+        for p in range(P):
+            best[p] = -1.0
+            fx[p] = fit_pts[k, p, 0]
+            fy[p] = fit_pts[k, p, 1]
         for n in range(N):
             c, s = math.cos(angle[k, n]), math.sin(angle[k, n])
+            for p in range(P):
+                mx, my = model_points[p, 0], model_points[p, 1]
+                rx[p] = c * mx - s * my
+                ry[p] = s * mx + c * my
             for i in range(V):
                 if not ok[k, n, i]:
                     continue
-                for p in range(model_points.shape[0]):
-                    mx, my = model_points[p, 0], model_points[p, 1]
-                    dx = c * mx - s * my + vx[k, n, i] - fit_pts[k, p, 0]
-                    dy = s * mx + c * my + vy[k, n, i] - fit_pts[k, p, 1]
-                    d = math.sqrt(dx * dx + dy * dy)
-                    if d > out[k, p]:
-                        out[k, p] = d
+                ux, uy = vx[k, n, i], vy[k, n, i]
+                for p in range(P):
+                    dx = rx[p] + ux - fx[p]
+                    dy = ry[p] + uy - fy[p]
+                    best[p] = max(best[p], dx * dx + dy * dy)
+        for p in range(P):
+            if best[p] >= 0.0:
+                d = math.sqrt(best[p])
+                if d > out[k, p]:
+                    out[k, p] = d
 
 
 def consistent_volume(
