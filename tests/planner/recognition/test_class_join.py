@@ -83,3 +83,64 @@ def test_no_class_holds_two_outlines_farther_apart_than_tau(seed, spread, curved
     # classes are numbered as their leaders come
     firsts = [np.flatnonzero(label == c).min() for c in np.unique(label)]
     assert firsts == sorted(firsts)
+
+
+def _joined_one_pair_at_a_time(rings, label, order, family, tau, max_points):
+    """The join walk as the module's docstring states it, every pair of leaders
+    compared directly (no tree), every member pair measured to the end."""
+    sizes = [len(r) for r in rings]
+    group = np.repeat(np.arange(len(rings)), sizes)
+    local = np.arange(len(label)) - np.concatenate([[0], np.cumsum(sizes)])[group]
+    points = np.array([r.points.shape[1] for r in rings])[group]
+    support = np.concatenate([r.support for r in rings])
+    place = np.argsort(order)
+    count = int(label.max()) + 1
+    members = [np.flatnonzero(label == c)[np.argsort(place[label == c])] for c in range(count)]
+    leaders = np.array([m[0] for m in members])
+    gap = np.abs(support[leaders][:, None] - support[leaders][None]).max(axis=2)
+    into, wide, left = np.arange(count), np.zeros(count, dtype=bool), max_points
+    for a, b in zip(*np.nonzero(np.triu(gap <= tau * (1 + 1e-9), 1)), strict=True):
+        mine, theirs = members[a], members[b]
+        if into[a] != a or into[b] != b or set(family[mine]) & set(family[theirs]):
+            continue
+        cost = len(mine) * int(points[theirs].sum()) + len(theirs) * int(points[mine].sum())
+        if cost > left:
+            continue
+        left -= cost
+        close = [
+            pair_distances(rings[group[m]], local[[m]], rings[group[t]], local[[t]])[0] <= tau
+            for m in mine
+            for t in theirs
+        ]
+        if all(close):
+            members[a] = np.concatenate([mine, theirs])
+            into[b], wide[a] = a, True
+    return into, wide
+
+
+@settings(max_examples=40, deadline=None, derandomize=True)
+@given(st.integers(0, 2**16), st.floats(0.3, 3.0), st.integers(0, 3), st.booleans())
+def test_joins_equal_the_walk_the_docstring_states(seed, spread, budget, twice):
+    """Nearby poses of an ellipse and a square (one or two stable poses), work
+    bounds from none to ample: the classes joined, and which are wide, are
+    those of the plain walk (candidate pairs from a tree, distances measured
+    only as far as the answer needs, work counted the same)."""
+    rng = np.random.default_rng(seed)
+    tau, n = 1.0, 24
+    stables = [ELLIPSE.stable_poses[0], SQUARE.stable_poses[0]][: 1 + twice]
+    rings = [
+        PosedRings.of(s, rng.normal(0, 0.01 * spread, n), rng.normal(0, 0.4 * spread, (n, 2)))
+        for s in stables
+    ]
+    total = n * len(rings)
+    order = rng.permutation(total)
+    family = rng.integers(0, total, total)
+    label = equivalence_classes(rings, order, family, tau)
+    max_points = [0, 2_000, 20_000, 4_000_000][budget]
+    joined, wide = join_classes(rings, label, order, family, tau, max_points)
+    into, ref_wide = _joined_one_pair_at_a_time(rings, label, order, family, tau, max_points)
+    # the same partition (the module renumbers classes as their leaders come)
+    assert len(np.unique(joined)) == len(np.unique(into[label]))
+    pairs = np.unique(np.column_stack([joined, into[label]]), axis=0)
+    assert len(pairs) == len(np.unique(joined))
+    assert sorted(wide.tolist()) == sorted(ref_wide[np.unique(into)].tolist())
