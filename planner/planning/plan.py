@@ -352,7 +352,9 @@ def _unless_predicted_better(
         l_top < l_best + 1e-9
         and (p_top > p_best + 1e-9 or (p_top > p_best - 1e-9 and e_top < e_best - 1e-9))
     )
-    if not better:
+    if not better or not judged.useful.any():
+        # ahead only by its logarithm, none predicted to leave fewer classes (a
+        # split class' parts outweigh the classes it settles): nothing to put first
         return paths, ranking.note
     why = (
         "the recognition predicts a better path than the outcome model's best "

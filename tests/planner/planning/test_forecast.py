@@ -488,3 +488,40 @@ def test_the_recognition_ranks_a_halving_path_before_one_that_settles_a_class(mo
     assert ranking.p_distinguishing[1] == pytest.approx(1 / 8)
     assert ranking.expected_log[0] == pytest.approx(math.log(4))
     assert ranking.expected_log[1] == pytest.approx(7 / 8 * math.log(7))
+
+
+def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best():
+    """A D shape alone, a required accuracy of 1 mm, the touches `lookahead`
+    chose (two misses, then a hit): the recognition ranks a path ahead of the
+    outcome model's best by the expected logarithm of the classes left while none
+    of the paths it judged is predicted to leave fewer classes (some truths would
+    split a class). The plan keeps the model's ranking; it used to fail looking
+    for the first path predicted to leave fewer (an error, a 500 over HTTP)."""
+    from planner.codec import observation_from_dict
+    from planner.types import Accuracy
+
+    models = [m for m in object_set("curved") if m.name == "d_shape"]
+    origin, side = [184.91893179950094, 76.19047619047619], [-1.0, 6.123233995736766e-17]
+    observations = [
+        {"path": {"origin": [200.0, 0.0], "direction": [-1.0, -0.0], "length": 400.0}},
+        {
+            "path": {
+                "origin": [origin[0], -origin[1]],
+                "direction": side,
+                "length": 369.8378635990019,
+            }
+        },
+        {
+            "path": {"origin": origin, "direction": side, "length": 369.8378635990019},
+            "contact": {
+                "point": [102.05126670288982, 76.16004539827351],
+                "normal": [0.5851089474633733, 0.8109546963908055],
+            },
+        },
+    ]
+    session = Session(models, BOUNDS[1], WORKSPACE, accuracy=Accuracy(1.0, 0.05))
+    for o in observations:
+        session = session.observe(observation_from_dict({"contact": None, **o}))
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(name="lookahead", budget_ms=None), 3)
+    assert found.paths and found.paths[0].scored_by == "outcome_model"
+    assert "predicts a better path" not in (found.note or "")
