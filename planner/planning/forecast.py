@@ -339,7 +339,8 @@ class RefiningPrediction:
     with one class left: the class' bound after each path's predicted contact
     (`translation`, `rotation`, `eps_t`); `current` the bound now; `pinning` the
     shortlist itself, best pinning first (the paths whose predicted contact
-    constrains the pose most, judged or not)."""
+    constrains the pose most, judged or not), of which the first `tried` were
+    judged before the budget ended the judging."""
 
     rows: np.ndarray
     translation: np.ndarray
@@ -347,6 +348,7 @@ class RefiningPrediction:
     eps_t: np.ndarray
     current: tuple[float, float]
     pinning: np.ndarray = dataclasses.field(default_factory=lambda: np.zeros(0, dtype=int))
+    tried: int = 0
 
 
 def recognition_refining(
@@ -376,9 +378,11 @@ def recognition_refining(
     judged: list[tuple[int, float, float, float, bool]] = []
     size = update_size(session)
     accuracy = session.accuracy
+    tried = 0
     for c in shortlist:
         if judged and budget.exhausted():
             break
+        tried += 1
         after = _observed(session, cands.path(int(c)), out, int(c), best)
         budget.spend_updates(1, size)
         where = None if after is None else after.localization
@@ -390,11 +394,11 @@ def recognition_refining(
         )
     if not judged:
         none = np.zeros(0)
-        return RefiningPrediction(none.astype(int), none, none, none, current, shortlist)
+        return RefiningPrediction(none.astype(int), none, none, none, current, shortlist, tried)
     c, t, r, e, ok = (np.array(v) for v in zip(*judged, strict=True))
     share = t / accuracy.translation + r / accuracy.rotation
     order = np.lexsort((found.motion[c], share, ~ok))
-    return RefiningPrediction(c[order], t[order], r[order], e[order], current, shortlist)
+    return RefiningPrediction(c[order], t[order], r[order], e[order], current, shortlist, tried)
 
 
 def _constraint_gain(

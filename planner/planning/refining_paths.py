@@ -145,6 +145,16 @@ def _refining_by_recognition(
             "could not judge its predicted contacts (they contradict the contacts so "
             "far); refining where a contact would pin the pose most"
         )
+    if not paths and judged.tried < len(judged.pinning):
+        # the budget ended the judging: what was not judged may still shrink the bound
+        rest = judged.pinning[judged.tried :][: config.max_paths]
+        paths = [planned(found, int(i), ranking, family=REFINING) for i in rest]
+        return paths, (
+            "one class left, its bound short of the required accuracy: the budget judged "
+            f"{judged.tried} of the {len(judged.pinning)} shortlisted paths, none predicted "
+            "to shrink the bound; refining where a contact would pin the pose most among "
+            "the others"
+        )
     if not paths:
         return [], (
             "one class left, its bound short of the required accuracy; no path shrinks its "

@@ -332,3 +332,26 @@ def test_a_class_whose_predicted_contacts_contradict_its_contacts_still_gets_a_p
     found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
     assert found.paths and found.paths[0].family == REFINING
     assert "pin the pose most" in (found.note or "")
+
+
+def test_a_budget_that_ends_the_judging_is_not_taken_for_no_path(monkeypatch):
+    """The scene above with no refining path from the outcome model, the budget
+    spent once the first shortlisted path is judged, and that path predicted to
+    change nothing: the plan does not say no path shrinks the bound (it judged
+    one of them); it offers the others, best pinning first, and says the budget
+    cut the judging (it said no path shrinks the bound, and the robot stopped)."""
+    from planner.planning import forecast
+    from planner.planning import refining_paths as refining_module
+    from planner.planning.budget import Budget
+    from planner.planning.plan import plan_session
+
+    monkeypatch.setattr(refining_module, "refining_paths", lambda *a: ([], None))
+    session = _stadium_touched_twice()
+    judged = []
+    monkeypatch.setattr(forecast, "_observed", lambda s, *a: judged.append(a) or s)
+    monkeypatch.setattr(Budget, "exhausted", lambda self: bool(judged))
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
+    assert len(judged) == 1
+    assert found.paths and all(p.family == REFINING for p in found.paths)
+    assert "the budget judged 1 of the" in (found.note or "")
+    assert judged[0][0] not in {p.path for p in found.paths}  # the judged path is not offered
