@@ -104,7 +104,9 @@ class PlannedPathOut(BaseModel):
     p_informative: float
     expected_pruning: float
     expected_remaining: float | None = Field(
-        description="expected touches still needed when taking this path (itself included)"
+        description="expected touches still needed when taking this path (itself included), "
+        "as the plan's search values it: not calibrated, values above two or three "
+        "overstate the touches taken (README, Calibration)"
     )
     motion_cost: float | None
     source: str | None = None

@@ -101,8 +101,10 @@ class TrialResult:
     error (Hausdorff distance of posed vertex sets, length; inf when wrong),
     per-step planning time (ms), predicted P(DM) by the outcome model and by the
     recognition's forecast (None for the opening probe, or not forecast) and
-    whether the step was distinguishing, the rig's travel, and per step what
-    ended its plan early (``"work"``, ``"time"`` or None)."""
+    whether the step was distinguishing, the rig's travel, per step what
+    ended its plan early (``"work"``, ``"time"`` or None), and per step the
+    best path's `expected_remaining` (None where unknown) and whether the plan's
+    search was `truncated`."""
 
     strategy: str
     trial: int
@@ -118,6 +120,8 @@ class TrialResult:
     distance: float
     time: float
     stopped_by: tuple[str | None, ...] = ()
+    expected_remaining: tuple[float | None, ...] = ()
+    truncated: tuple[bool, ...] = ()
 
     @property
     def localized(self) -> bool:
@@ -209,6 +213,8 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
         p_distinguishing=tuple(s.advice.p_distinguishing for s in rec.steps),
         p_forecast=tuple(s.advice.p_forecast for s in rec.steps),
         distinguishing=tuple(s.distinguishing for s in rec.steps),
+        expected_remaining=tuple(s.advice.expected_remaining for s in rec.steps),
+        truncated=tuple(s.advice.truncated for s in rec.steps),
         distance=rec.distance,
         time=rec.time,
     )

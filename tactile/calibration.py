@@ -9,6 +9,10 @@ many simulated touches, grouped in bins of the prediction, the observed share
 of distinguishing touches should match the bin's mean prediction: within
 `tolerance` (0.05) for every bin holding at least `min_count` (100) touches.
 
+The best path's `expected_remaining` (the expected touches still needed,
+itself included) is tabled too, against the touches the localized trials then
+took: it is the search's value, reported as information, not judged.
+
 Run it::
 
     python -m tactile.calibration --objects thesis_like --trials 250 \\
@@ -18,6 +22,7 @@ Run it::
 from __future__ import annotations
 
 import argparse
+import itertools
 import json
 import math
 import sys
@@ -34,10 +39,14 @@ from tactile.simulate import progress_bar
 
 __all__ = [
     "PREDICTIONS",
+    "REMAINING_EDGES",
     "ReliabilityBin",
+    "RemainingBin",
     "calibration_ok",
     "main",
     "reliability_table",
+    "remaining_records",
+    "remaining_table",
     "touch_records",
 ]
 
@@ -77,6 +86,63 @@ def touch_records(
                 pred.append(p)
                 obs.append(d)
     return np.asarray(pred, dtype=float), np.asarray(obs, dtype=bool)
+
+
+@dataclass(frozen=True)
+class RemainingBin:
+    """Planned touches of localized trials whose best path's `expected_remaining`
+    fell in [`low`, `high`): how many, how many of them from a plan whose search
+    the budget stopped, the mean expected and the mean touches the trial then
+    took (that touch included), and the share where the expectation exceeded them."""
+
+    low: float
+    high: float
+    count: int
+    truncated: int
+    mean_expected: float
+    mean_taken: float
+    over: float
+
+
+#: Edges of the expected-remaining bins (the last is open).
+REMAINING_EDGES = (1.0, 1.5, 2.0, 3.0, 5.0, 10.0, math.inf)
+
+
+def remaining_records(results: Sequence[TrialResult]) -> tuple[np.ndarray, ...]:
+    """(expected remaining, touches taken from there on, truncated) of every
+    planned touch of a localized trial that had an expectation."""
+    rows = [
+        (e, r.touches - k, bool(t))
+        for r in results
+        if r.localized
+        for k, (e, t) in enumerate(zip(r.expected_remaining, r.truncated, strict=True))
+        if e is not None and math.isfinite(e)
+    ]
+    e, taken, cut = (np.array(c) for c in zip(*rows, strict=True)) if rows else ([],) * 3
+    return np.asarray(e, float), np.asarray(taken, float), np.asarray(cut, bool)
+
+
+def remaining_table(
+    expected: np.ndarray, taken: np.ndarray, truncated: np.ndarray
+) -> list[RemainingBin]:
+    """Bin the touches by expected remaining (:data:`REMAINING_EDGES`) and compare
+    with the touches taken."""
+    table = []
+    for low, high in itertools.pairwise(REMAINING_EDGES):
+        sel = (expected >= low) & (expected < high)
+        n = int(sel.sum())
+        table.append(
+            RemainingBin(
+                low,
+                high,
+                n,
+                int(truncated[sel].sum()),
+                float(expected[sel].mean()) if n else math.nan,
+                float(taken[sel].mean()) if n else math.nan,
+                float((expected[sel] > taken[sel]).mean()) if n else math.nan,
+            )
+        )
+    return table
 
 
 def reliability_table(
@@ -123,6 +189,13 @@ def main(argv: Sequence[str] | None = None) -> int:
     parser.add_argument("--tolerance", type=float, default=0.05)
     parser.add_argument("--min-count", type=int, default=100)
     parser.add_argument("--trial-timeout", type=float, default=None, metavar="SECONDS")
+    parser.add_argument(
+        "--budget-work",
+        type=float,
+        default=None,
+        help="plan work budget (default: none, the predictions unbounded by it; the "
+        "service's default is 400000)",
+    )
     parser.add_argument("--json", action="store_true")
     args = parser.parse_args(argv)
     spec = ExperimentSpec(
@@ -135,7 +208,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         truth=args.truth,
         trial_timeout=args.trial_timeout,
         # the predictions are measured, not the speed: no time budget cuts a plan
-        strategy={"budget_ms": None, "budget_work": None},
+        strategy={"budget_ms": None, "budget_work": args.budget_work},
     )
     update, close = progress_bar(spec.trials * len(spec.strategies))
     results = run_experiment(spec, args.workers, None, update)
@@ -147,11 +220,13 @@ def main(argv: Sequence[str] | None = None) -> int:
         table = reliability_table(pred, obs, args.bins, args.tolerance, args.min_count)
         tables[kind] = (len(pred), table)
     ok = calibration_ok(tables["forecast"][1])  # the forecast is the probability offered
+    remaining = remaining_table(*remaining_records(results))
     if args.json:
         out = {
             kind: {"touches": n, "ok": calibration_ok(t), "bins": [asdict(b) for b in t]}
             for kind, (n, t) in tables.items()
         }
+        out["expected_remaining"] = {"bins": [_finite(asdict(b)) for b in remaining]}
         print(json.dumps({"timeouts": timeouts, "ok": ok, **out}))
         return 0 if ok else 1
     print(
@@ -169,11 +244,24 @@ def main(argv: Sequence[str] | None = None) -> int:
                 f"  [{b.low:.1f}, {b.high:.1f})  {b.count:8d}  {b.mean_predicted:14.3f}  "
                 f"{b.observed:8.3f}  {diff:6.3f}  {check}"
             )
+    print("expected remaining touches (best path; localized trials), against those taken")
+    print("  E bin          touches  truncated  mean expected  mean taken  expected > taken")
+    for b in remaining:
+        print(
+            f"  [{b.low:g}, {b.high:g})".ljust(16)
+            + f"{b.count:7d}  {b.truncated:9d}  {b.mean_expected:13.2f}  {b.mean_taken:10.2f}"
+            + f"  {b.over:16.2f}"
+        )
     print(
         "forecast calibrated" if ok else "forecast NOT calibrated",
         f"(tolerance {args.tolerance}, bins with >= {args.min_count} touches)",
     )
     return 0 if ok else 1
+
+
+def _finite(row: dict) -> dict:
+    """JSON has no infinity: an open bin edge and an empty bin's means as None."""
+    return {k: None if isinstance(v, float) and not math.isfinite(v) else v for k, v in row.items()}
 
 
 if __name__ == "__main__":

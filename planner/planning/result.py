@@ -33,10 +33,14 @@ class PlannedPath:
     apart but shrinks their error disks to `expected_eps_t`, the class-weighted
     mean disk diameter expected after the touch);
     `expected_remaining` the expected number of touches still needed if this
-    path is taken, itself included (None when unknown, e.g. before any contact;
-    a lower bound when the plan is `truncated`): ``lookahead`` searches it
-    `depth` touches deep, a set still open there counted at log |T| over the best
-    gain per touch (``optimal``: to the end on small sets); the other
+    path is taken, itself included (None when unknown, e.g. before any contact),
+    as the search values it, not calibrated: ``lookahead`` searches it `depth`
+    touches deep, a set still open there counted at log |T| over the best gain
+    one touch gives now (the worst-case outcome model's), which later touches
+    usually beat, so that values above two or three overstate the touches taken
+    (measured: README, Calibration; the same in a `truncated` plan, where paths
+    the search did not reach keep that estimate); ``optimal``: to the end on
+    small sets; the other
     strategies search it `depth` deep only on small sets (at most
     `optimal_max_classes` classes) and otherwise give the one-touch bound, a
     lower bound of the deeper value; `motion_cost` the arc along

@@ -8,7 +8,13 @@ import numpy as np
 import pytest
 
 from planner.models.library import dump_objects
-from tactile.calibration import calibration_ok, reliability_table, touch_records
+from tactile.calibration import (
+    calibration_ok,
+    reliability_table,
+    remaining_records,
+    remaining_table,
+    touch_records,
+)
 from tactile.cli import main
 from tests.conftest import ELL, WEDGE
 
@@ -123,3 +129,31 @@ def test_touch_records_skip_the_opening(sequential_results):
         assert np.all((pred >= 0) & (pred <= 1)) and obs.dtype == bool
     with pytest.raises(ValueError, match="prediction"):
         touch_records(sequential_results, "guess")
+
+
+def test_expected_remaining_is_tabled_against_the_touches_taken(sequential_results):
+    """Every planned touch of a localized trial with an expectation, paired with the
+    touches the trial took from it on (that one included): the last planned touch
+    took one, the first as many as the trial had left."""
+    expected, taken, truncated = remaining_records(sequential_results)
+    localized = [r for r in sequential_results if r.localized]
+    with_e = sum(e is not None for r in localized for e in r.expected_remaining)
+    assert len(expected) == len(taken) == len(truncated) == with_e > 0
+    assert taken.min() >= 1 and taken.max() <= max(r.touches for r in localized)
+    table = remaining_table(expected, taken, truncated)
+    assert sum(b.count for b in table) == int((expected >= 1).sum())
+    for b in table:
+        if b.count:
+            assert b.low <= b.mean_expected < b.high and 0 <= b.over <= 1
+
+
+def test_remaining_table_bins_by_expectation():
+    expected = np.array([1.0, 1.2, 2.5, 2.5, 7.0, 40.0])
+    taken = np.array([1, 2, 2, 4, 3, 3], dtype=float)
+    table = remaining_table(expected, taken, np.array([0, 0, 0, 1, 1, 1], bool))
+    counts = {(b.low, b.high): (b.count, b.truncated) for b in table}
+    assert counts[(1.0, 1.5)] == (2, 0) and counts[(2.0, 3.0)] == (2, 1)
+    assert counts[(5.0, 10.0)] == (1, 1) and counts[(10.0, float("inf"))] == (1, 1)
+    first = table[0]
+    assert first.mean_expected == pytest.approx(1.1) and first.mean_taken == 1.5
+    assert first.over == 0.0 and table[2].over == 0.5

@@ -28,7 +28,9 @@ class PlannedPathOut:
             aim (list[float]):
             direction (list[float]):
             expected_pruning (float):
-            expected_remaining (float | None): expected touches still needed when taking this path (itself included)
+            expected_remaining (float | None): expected touches still needed when taking this path (itself included), as the
+                plan's search values it: not calibrated, values above two or three overstate the touches taken (README,
+                Calibration)
             family (str): distinguishing, informative, partial, uninformative, or refining (offered only when no path is
                 informative: it shrinks the error disks)
             length (float):
