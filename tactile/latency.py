@@ -77,6 +77,9 @@ def main(argv: list[str] | None = None) -> None:
                     "workspace": {"center": [0, 0], "radius": workspace.radius},
                     "strategy": {
                         "name": args.strategy,
+                        # the plans' own random stream too (else seeded from the session
+                        # id): two runs of one seed make the same plans, to compare
+                        "seed": args.seed,
                         **({} if args.budget_ms is None else {"budget_ms": args.budget_ms}),
                         **({} if args.budget_work is None else {"budget_work": args.budget_work}),
                     },
