@@ -17,8 +17,10 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
+import numba
 import numpy as np
 
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
@@ -28,6 +30,7 @@ from planner.types import Contact, Faces, StablePose
 __all__ = [
     "ConstraintTables",
     "build_tables",
+    "extend_feasibility",
     "pair_feasibility",
     "shared_tables",
     "unary_feasibility",
@@ -97,6 +100,29 @@ def _read_only(tables: ConstraintTables) -> ConstraintTables:
     return tables
 
 
+@dataclass(frozen=True)
+class _Pair:
+    """What the checks of two contacts read besides the tables: the distance
+    ``|r|``, the measured turn from the first normal to the second, the
+    projections ``u·r`` and ``v·(-r)``, and the direction checks' widening."""
+
+    dist: float
+    measured: float
+    forward: float
+    backward: float
+    widen: float
+
+
+def _pair(first: Contact, second: Contact, eps_d: float, phi: float, slack: float) -> _Pair:
+    p, q = np.asarray(first.point), np.asarray(second.point)
+    u, v = np.asarray(first.normal), np.asarray(second.normal)
+    r = q - p
+    dist = float(np.hypot(*r))
+    measured = float(np.arctan2(v[1], v[0]) - np.arctan2(u[1], u[0]))
+    widen = phi * dist + 2 * eps_d + slack
+    return _Pair(dist, measured, float(u @ r), float(v @ -r), widen)
+
+
 def pair_feasibility(
     tables: ConstraintTables, first: Contact, second: Contact, eps_d: float, phi: float
 ) -> np.ndarray:
@@ -110,23 +136,86 @@ def pair_feasibility(
     [[0, 1], [1, 2], [2, 3], [3, 0]]
     """
     slack = LENGTH_SLACK * tables.scale
-    p, q = np.asarray(first.point), np.asarray(second.point)
-    u, v = np.asarray(first.normal), np.asarray(second.normal)
-    r = q - p
-    dist = float(np.hypot(*r))
+    pair = _pair(first, second, eps_d, phi, slack)
+    dist, widen = pair.dist, pair.widen
     # distance: Dmin - 2 eps_d <= |r| <= Dmax + 2 eps_d
     ok = (tables.d_min - 2 * eps_d - slack <= dist) & (dist <= tables.d_max + 2 * eps_d + slack)
     # angle: |wrap(angle(u -> v) - angle(n_a -> n_b))| <= 2 phi
-    measured = np.arctan2(v[1], v[0]) - np.arctan2(u[1], u[0])
-    ok &= np.abs(wrap_angle(measured - tables.angle)) <= 2 * phi + ANGLE_SLACK
+    ok &= np.abs(wrap_angle(pair.measured - tables.angle)) <= 2 * phi + ANGLE_SLACK
     # direction j -> k: u·r within phi |r| + 2 eps_d of [Cmin(a,b), Cmax(a,b)]
-    widen = phi * dist + 2 * eps_d + slack
-    forward = float(u @ r)
-    ok &= (tables.c_min - widen <= forward) & (forward <= tables.c_max + widen)
+    ok &= (tables.c_min - widen <= pair.forward) & (pair.forward <= tables.c_max + widen)
     # direction k -> j: v·(-r) against the tables read from b to a
-    backward = float(v @ -r)
-    ok &= (tables.c_min.T - widen <= backward) & (backward <= tables.c_max.T + widen)
+    ok &= (tables.c_min.T - widen <= pair.backward) & (pair.backward <= tables.c_max.T + widen)
     return ok
+
+
+def extend_feasibility(
+    tables: ConstraintTables,
+    rows: np.ndarray,
+    contacts: list[Contact],
+    unary: np.ndarray,
+    eps_d: float,
+    phi: float,
+) -> np.ndarray:
+    """(K, F) may the newest of `contacts` lie on face b, given each row's faces
+    (`rows` (K, k), -1: spurious) for the k contacts before it? `unary` (F,) and
+    every pair check of :func:`pair_feasibility` between each earlier contact on
+    its row's face and the newest on b: the same arithmetic, in one compiled pass
+    that reads only the table cells the rows name (a table per earlier contact
+    was F x F numbers, most of them never read)."""
+    *before, new = contacts
+    slack = LENGTH_SLACK * tables.scale
+    pairs = [_pair(c, new, eps_d, phi, slack) for c in before]
+    field = [
+        np.array([getattr(x, f) for x in pairs], dtype=float) for f in _Pair.__dataclass_fields__
+    ]
+    out = np.empty((len(rows), len(unary)), dtype=bool)
+    _extend(
+        np.ascontiguousarray(rows, dtype=np.int64),
+        np.ascontiguousarray(unary, dtype=bool),
+        tables.d_min, tables.d_max, tables.angle, tables.c_min, tables.c_max,
+        *field, 2 * eps_d, slack, 2 * phi + ANGLE_SLACK, out,
+    )  # fmt: skip
+    return out
+
+
+@numba.njit(cache=True, nogil=True)
+def _extend(
+    rows,
+    unary,
+    d_min,
+    d_max,
+    angle,
+    c_min,
+    c_max,
+    dist,
+    measured,
+    forward,
+    backward,
+    widen,
+    two_eps,
+    slack,
+    turn,
+    out,
+):  # type: ignore[no-untyped-def]
+    """:func:`extend_feasibility` into `out`: each check written as the array
+    expressions of :func:`pair_feasibility` evaluate it, cell by cell."""
+    two_pi = 2 * math.pi
+    for r in range(rows.shape[0]):
+        for b in range(unary.shape[0]):
+            ok = unary[b]
+            j = 0
+            while ok and j < rows.shape[1]:
+                a = rows[r, j]
+                if a >= 0:
+                    d, w = dist[j], widen[j]
+                    ok = d_min[a, b] - two_eps - slack <= d and d <= d_max[a, b] + two_eps + slack
+                    turned = (measured[j] - angle[a, b] + math.pi) % two_pi - math.pi
+                    ok = ok and abs(turned) <= turn
+                    ok = ok and c_min[a, b] - w <= forward[j] and forward[j] <= c_max[a, b] + w
+                    ok = ok and c_min[b, a] - w <= backward[j] and backward[j] <= c_max[b, a] + w
+                j += 1
+            out[r, b] = ok
 
 
 def unary_feasibility(

@@ -271,7 +271,7 @@ class Session:
             remap[keep] = np.arange(len(keep))
             rows_kept.append(rows[keep])
             candidates.append(_reindex(cand, remap[cand.row]))
-        return _Derived(TreeLevel(tuple(rows_kept), level.pair_cache), tuple(candidates))
+        return _Derived(TreeLevel(tuple(rows_kept)), tuple(candidates))
 
     @property
     def hypothesis_count(self) -> int:

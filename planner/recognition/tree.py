@@ -9,7 +9,7 @@ then the model check on the fitted pose (:mod:`planner.recognition.evaluate`).
 
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
 import shapely
@@ -18,7 +18,7 @@ from planner.memo import SharedCache, array_key, cached_property
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
     ConstraintTables,
-    pair_feasibility,
+    extend_feasibility,
     shared_tables,
     unary_feasibility,
 )
@@ -90,10 +90,9 @@ def make_groups(models: list[ObjectModel]) -> list[Group]:
 @dataclass(frozen=True, eq=False)
 class TreeLevel:
     """Surviving partial interpretations per group: rows (K, depth) of face indices (-1 =
-    spurious), plus the pair-feasibility matrices computed so far, keyed (group, j, k)."""
+    spurious)."""
 
     rows: tuple[np.ndarray, ...]
-    pair_cache: dict[tuple[int, int, int], np.ndarray] = field(default_factory=dict)
 
 
 def extend(
@@ -106,22 +105,13 @@ def extend(
 ) -> TreeLevel:
     """Extend every surviving row by the newest contact, made at probing `height`
     (constraint checks only): it may lie only on faces of the layer at that height."""
-    k = len(contacts) - 1
-    new = contacts[k]
-    cache = dict(level.pair_cache)
+    new = contacts[-1]
     out = []
-    for g, (group, rows) in enumerate(zip(groups, level.rows, strict=True)):
-        F = len(group.stable.all_faces)
+    for group, rows in zip(groups, level.rows, strict=True):
         unary = unary_feasibility(group.stable, new, config.normal_z_error, height)
-        ok = np.broadcast_to(unary, (len(rows), F)).copy()
-        for j in range(k):
-            key = (g, j, k)
-            if key not in cache:
-                cache[key] = pair_feasibility(
-                    group.tables, contacts[j], new, bounds.position_error, bounds.normal_error
-                )
-            col = rows[:, j]
-            ok &= np.where(col[:, None] >= 0, cache[key][np.maximum(col, 0)], True)
+        ok = extend_feasibility(
+            group.tables, rows, contacts, unary, bounds.position_error, bounds.normal_error
+        )
         parent, face = np.nonzero(ok)
         grown = [np.column_stack([rows[parent], face])]
         outliers = (rows < 0).sum(axis=1)
@@ -129,4 +119,4 @@ def extend(
         if spare.size:
             grown.append(np.column_stack([rows[spare], np.full(spare.size, -1)]))
         out.append(np.concatenate(grown).astype(np.int64))
-    return TreeLevel(rows=tuple(out), pair_cache=cache)
+    return TreeLevel(rows=tuple(out))

@@ -6,12 +6,19 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from planner.geometry import wrap_angle
 from planner.memo import SharedCache
 from planner.models.outlines import make_stable_pose
 from planner.recognition import constraints
-from planner.recognition.constraints import ConstraintTables, build_tables, pair_feasibility
+from planner.recognition.constraints import (
+    ConstraintTables,
+    build_tables,
+    extend_feasibility,
+    pair_feasibility,
+)
 from planner.types import Contact, Faces
 from tests.conftest import SET_NAMES, object_set
 
@@ -92,3 +99,44 @@ def test_tables_are_built_once_per_stable_pose_and_the_process_keeps_a_bounded_n
     monkeypatch.setattr(fresh, "limit", 16 + 9)
     constraints.shared_tables(make_stable_pose([[0, 0], [4, 0], [4, 1], [0, 1]]).faces)
     assert constraints.shared_tables(make_stable_pose(square).faces) is not first
+
+
+@settings(max_examples=60, deadline=None, derandomize=True)
+@given(
+    name=st.sampled_from(SET_NAMES),
+    seed=st.integers(0, 2**32 - 1),
+    earlier=st.integers(0, 5),
+    eps_d=st.sampled_from([0.0, 0.5, 1.0, 3.0]),
+    phi=st.sampled_from([0.0, 0.02, 0.0873, 0.3]),
+)
+def test_extension_checks_are_the_pair_checks_bit_for_bit(name, seed, earlier, eps_d, phi):
+    """The compiled extension (every earlier contact on its row's face, the newest
+    on each face) answers as the pair tables do, read at the rows' faces, cell
+    for cell: contacts on faces and off them, spurious assignments (-1) among
+    the rows, no earlier contact at all."""
+    rng = np.random.default_rng(seed)
+    model = object_set(name)[rng.integers(len(object_set(name)))]
+    pose = model.stable_poses[rng.integers(len(model.stable_poses))]
+    faces = pose.all_faces
+    tables = build_tables(faces)
+    F = len(faces)
+    contacts = []
+    for _ in range(earlier + 1):
+        f = rng.integers(F)
+        at = faces.start[f] + rng.uniform(0, 1) * (faces.end[f] - faces.start[f])
+        turn = rng.normal(0, 0.05)
+        n = faces.normal[f]
+        normal = (
+            n[0] * math.cos(turn) - n[1] * math.sin(turn),
+            n[0] * math.sin(turn) + n[1] * math.cos(turn),
+        )
+        contacts.append(Contact(tuple(at + rng.normal(0, 1.0, 2)), normal))
+    rows = rng.integers(-1, F, (40, earlier))
+    unary = rng.random(F) < 0.8
+    expected = np.broadcast_to(unary, (len(rows), F)).copy()
+    for j in range(earlier):
+        table = pair_feasibility(tables, contacts[j], contacts[-1], eps_d, phi)
+        col = rows[:, j]
+        expected &= np.where(col[:, None] >= 0, table[np.maximum(col, 0)], True)
+    found = extend_feasibility(tables, rows, contacts, unary, eps_d, phi)
+    np.testing.assert_array_equal(found, expected)
