@@ -404,8 +404,11 @@ class Session:
         best = hyps[0].equivalence_class
         members = [h for h in hyps if h.equivalence_class == best]
         # the members lie within tau/2 of the leader's outline (tau in a joined class):
-        # the class bound is the widest member's, its outline disk widened by as much
+        # the class bound is the widest member's, its outline disk widened by as much;
+        # a class of one is its leader, and its bound the leader's own
         half = self.symmetry_tolerance / (1 if best in self.joined_classes else 2)
+        if len(members) == 1:
+            half = 0.0
         # a round outline's rotation is free: every rotation is one class
         free = all(self._round_poses[h.object][h.stable_pose] for h in members)
         bound = ErrorBound(

@@ -18,6 +18,7 @@ from hypothesis import strategies as st
 from scipy.spatial import cKDTree
 
 from hardware_sim.world import random_world
+from planner.geometry import wrap_angle
 from planner.models.library import object_from_dict
 from planner.recognition.equivalence import (
     EDGE_SAMPLES,
@@ -201,7 +202,7 @@ def test_localized_names_the_true_object_and_bounds_the_true_outline(name):
     """200 worlds drawn from the prior per set, four random hitting touches each at
     1 mm / 3 degrees: whenever the session says localized, it is right."""
     models = models_of(name)
-    localized = 0
+    localized = singles = 0
     for seed in range(200):
         world, session = touched(models, 1000 + seed, 4)
         if session.status != "localized":
@@ -214,7 +215,15 @@ def test_localized_names_the_true_object_and_bounds_the_true_outline(name):
         bound = session.localization.bound
         assert outline_gap(posed(session, best), true_poly) <= bound.eps_t / 2 + 1e-6
         assert Accuracy.admits(session.accuracy, bound)
+        # a class of one reports its leader's own bound: the truth's pose lies in it
+        alone = sum(h.equivalence_class == best.equivalence_class for h in session.hypotheses)
+        if alone == 1 and (best.object, best.stable_pose) == (world.model.name, world.pose_index):
+            moved = math.hypot(best.pose.x - world.pose.x, best.pose.y - world.pose.y)
+            assert moved <= bound.translation + 1e-6
+            assert abs(wrap_angle(best.pose.theta - world.pose.theta)) <= bound.rotation + 1e-9
+            singles += 1
     assert localized > 0
+    assert singles > 0 or name == "symmetric"  # every part of that set has a symmetry
 
 
 def _classes_without_filter(rings, order, family, tau):
