@@ -18,11 +18,12 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass
+from dataclasses import dataclass, fields
 
 import numba
 import numpy as np
 
+from planner.compiled import c_array
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK, segment_segment_distance, wrap_angle
 from planner.memo import SharedCache, array_key
 from planner.types import Contact, Faces, StablePose
@@ -166,15 +167,13 @@ def extend_feasibility(
     *before, new = contacts
     slack = LENGTH_SLACK * tables.scale
     pairs = [_pair(c, new, eps_d, phi, slack) for c in before]
-    field = [
-        np.array([getattr(x, f) for x in pairs], dtype=float) for f in _Pair.__dataclass_fields__
-    ]
+    columns = [np.array([getattr(x, f.name) for x in pairs], dtype=float) for f in fields(_Pair)]
     out = np.empty((len(rows), len(unary)), dtype=bool)
+    # the tables are always read-only (shared between sessions): one compiled version
     _extend(
-        np.ascontiguousarray(rows, dtype=np.int64),
-        np.ascontiguousarray(unary, dtype=bool),
+        c_array(rows, dtype=np.int64), c_array(unary, dtype=bool),
         tables.d_min, tables.d_max, tables.angle, tables.c_min, tables.c_max,
-        *field, 2 * eps_d, slack, 2 * phi + ANGLE_SLACK, out,
+        *columns, 2 * eps_d, slack, 2 * phi + ANGLE_SLACK, out,
     )  # fmt: skip
     return out
 

@@ -48,16 +48,7 @@ def segments_meet(segments: np.ndarray, edges: np.ndarray) -> np.ndarray:
     or touch an edge, or lie inside?"""
     out = np.zeros(len(segments), dtype=bool)
     if len(edges):
-        edges = c_array(edges, dtype=float)
-        box = np.array(
-            [
-                edges[:, [0, 2]].min(),
-                edges[:, [1, 3]].min(),
-                edges[:, [0, 2]].max(),
-                edges[:, [1, 3]].max(),
-            ]
-        )
-        _meet(c_array(segments, dtype=float), edges, box, out)
+        _meet(c_array(segments, dtype=float), c_array(edges, dtype=float), out)
     return out
 
 
@@ -69,13 +60,18 @@ def _orient(ax, ay, bx, by, cx, cy):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _meet(segments, edges, box, out):  # type: ignore[no-untyped-def]
-    """:func:`segments_meet` into `out`; `box` (x0, y0, x1, y1) bounds the edges."""
+def _meet(segments, edges, out):  # type: ignore[no-untyped-def]
+    """:func:`segments_meet` into `out`, each segment first screened against the
+    box of all the edges."""
+    x0 = min(edges[:, 0].min(), edges[:, 2].min())
+    y0 = min(edges[:, 1].min(), edges[:, 3].min())
+    x1 = max(edges[:, 0].max(), edges[:, 2].max())
+    y1 = max(edges[:, 1].max(), edges[:, 3].max())
     for n in range(segments.shape[0]):
         ax, ay, bx, by = segments[n, 0], segments[n, 1], segments[n, 2], segments[n, 3]
         lox, hix = min(ax, bx), max(ax, bx)
         loy, hiy = min(ay, by), max(ay, by)
-        if hix < box[0] or lox > box[2] or hiy < box[1] or loy > box[3]:
+        if hix < x0 or lox > x1 or hiy < y0 or loy > y1:
             continue
         inside = False
         met = False

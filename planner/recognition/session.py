@@ -407,8 +407,7 @@ class Session:
         # the class bound is the widest member's, its outline disk widened by as much;
         # a class of one is its leader, and its bound the leader's own
         half = self.symmetry_tolerance / (1 if best in self.joined_classes else 2)
-        if len(members) == 1:
-            half = 0.0
+        half = 0.0 if len(members) == 1 else half
         # a round outline's rotation is free: every rotation is one class
         free = all(self._round_poses[h.object][h.stable_pose] for h in members)
         bound = ErrorBound(
