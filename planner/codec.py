@@ -125,8 +125,9 @@ def observation_to_dict(obs: Observation, *, normal_z: NormalZ = "known") -> dic
 
 def observation_from_dict(data: Mapping[str, Any]) -> Observation:
     """The observation of its JSON form (checked by the planner's types: finite
-    numbers, non-zero vectors, the contact not behind the path's origin; direction
-    and normal normalized)."""
+    numbers, non-zero vectors; direction and normal normalized). Whether the
+    contact lies too far behind the path's origin depends on the sensor: the
+    session checks it."""
     path = data["path"]
     contact = data.get("contact")
     return Observation(

@@ -17,7 +17,6 @@ import numpy as np
 
 from planner import geometry
 from planner.errors import InvalidObservationError
-from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
 
 __all__ = [
@@ -267,15 +266,15 @@ class Observation:
     path: SensingPath
     contact: Contact | None = None
 
-    def __post_init__(self) -> None:
+    def behind_origin(self) -> float:
+        """How far the contact lies behind the path's origin (0 for a miss or a
+        contact ahead of it). A measured contact may lie up to the position error
+        behind it, where the part lies that close to the origin; the session that
+        knows its sensor refuses more (:meth:`~planner.recognition.session.Session.observe`)."""
         if self.contact is None:
-            return
+            return 0.0
         offset = np.asarray(self.contact.point) - np.asarray(self.path.origin)
-        along = float(offset @ np.asarray(self.path.direction))
-        if along < -LENGTH_SLACK * max(1.0, self.path.length):
-            raise InvalidObservationError(
-                "contact lies behind the path origin", field="contact.point"
-            )
+        return max(0.0, -float(offset @ np.asarray(self.path.direction)))
 
 
 @dataclass(frozen=True, eq=False)

@@ -29,6 +29,7 @@ from typing import Literal
 import numpy as np
 
 from planner.errors import InvalidObservationError
+from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
 from planner.models.heights import check_height, probing_heights
 from planner.models.round import round_within
@@ -152,6 +153,13 @@ class Session:
 
     def _after(self, observation: Observation, config: RecognitionConfig) -> Session:
         check_height(self.models, observation.path.height)
+        length = max(1.0, observation.path.length)
+        slack = self.working_sensor.position_error + LENGTH_SLACK * length
+        if observation.behind_origin() > slack:
+            raise InvalidObservationError(
+                "contact lies behind the path origin by more than the position error",
+                field="contact.point",
+            )
         return Session(
             self.given_models,
             self.sensor,

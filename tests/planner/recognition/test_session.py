@@ -211,3 +211,20 @@ def test_a_prediction_keeps_what_the_update_keeps_weighed_without_the_residual_f
             )
             session = observed
     assert reweighed  # the fitness was left out somewhere it mattered
+
+
+def test_a_contact_measured_behind_an_origin_at_the_part_is_kept_within_the_error():
+    """A path may start within the position error of the part (one lying at the
+    edge of the workspace): its measured contact may then lie behind the origin.
+    Up to the error it is a measurement like any other, and the truth survives;
+    farther back it is refused."""
+    session = Session(_by_name("square"), SensorBounds(1.0, math.radians(3)), WORKSPACE)
+    near = _obs((0, -40.3), (0, 1), (0.2, -40.8), (0, -1))
+    assert near.behind_origin() == pytest.approx(0.5)
+    session = session.observe(near).observe(_obs((200, 10), (-1, 0), (40.4, 10), (1, 0)))
+    assert session.status == "localized"
+    best = session.hypotheses[0]
+    assert math.hypot(best.pose.x, best.pose.y) <= best.error_bound.eps_t / 2 + 1e-9
+    with pytest.raises(InvalidObservationError) as refused:
+        session.observe(_obs((0, -40.3), (0, 1), (0.2, -42.5), (0, -1)))
+    assert refused.value.field == "contact.point"
