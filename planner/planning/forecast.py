@@ -42,6 +42,7 @@ from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
+from planner.planning.screen import best_member, screened_log
 from planner.recognition.session import Session
 from planner.types import Contact, Hypothesis, Observation, SensingPath, SensorBounds
 
@@ -188,12 +189,15 @@ def recognition_ranking(
 ) -> RecognitionRanking:
     """Rank candidates on what the recognition itself concludes (DESIGN §4.15).
 
-    Shortlist: paths aimed at the classes' differences first (one per feature
-    before the rest), then the others by how far apart the classes' nominal
-    outcomes lie (in error bounds), the outcome model's P(informative) and motion.
-    Each of the most probable classes predicts its nominal outcome on a path with
-    its best member (the cast of the analysis); the session observes it; the
-    classes left are counted. ``E[classes] = sum_k w(k) classes(after k's
+    Shortlist: every path aimed at the classes' differences, and the others whose
+    classes' nominal outcomes lie over a bound apart (or the first `SHORTLIST` of
+    them by that distance, the outcome model's P(informative) and motion), ordered
+    by the screen's guess at the expected log of the classes left
+    (:mod:`planner.planning.screen`; ties keep that order): the budget pays for a
+    handful of judged paths, and which handful decides the touch. Each of the
+    most probable classes predicts its nominal outcome on a path with its best
+    member (the cast of the analysis); the session observes it; the classes left
+    are counted. ``E[classes] = sum_k w(k) classes(after k's
     outcome)``. The first path is always judged, the rest while the `budget`
     allows: `SHORTLIST` of them, and past that (up to `SHORTLIST_ROUNDS` times as
     many) while none is predicted to change the classes. Candidates `first` are
@@ -206,9 +210,10 @@ def recognition_ranking(
     current = posed.n_classes
     top = np.argsort(-posed.class_weight, kind="stable")[:classes]
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
-    best = [np.flatnonzero(posed.cls == k)[np.argmax(posed.weight[posed.cls == k])] for k in top]
+    best = [best_member(posed, int(k)) for k in top]
     # the paths aimed at the classes' differences in the order they were made (one
-    # per feature first), then the others where the classes' outcomes differ most
+    # per feature first), then the others where the classes' outcomes differ most;
+    # then the likeliest splits first by the screen
     feature = np.flatnonzero(cands.source == "feature")
     other = np.flatnonzero(cands.source != "feature")
     apart = _outcomes_apart(out, other, np.array(best), session.working_sensor)
@@ -217,8 +222,11 @@ def recognition_ranking(
     # past the first `SHORTLIST`, only paths where the outcomes lie over a bound apart
     shortlist = np.concatenate([feature, other])
     keep = np.arange(len(shortlist)) < SHORTLIST
+    keep[: len(feature)] = True
     keep[len(feature) :] |= apart > 1.0
-    shortlist = shortlist[keep][: SHORTLIST * SHORTLIST_ROUNDS]
+    shortlist = shortlist[keep]
+    screen = screened_log(out, shortlist, posed, top, weight, session.working_sensor)
+    shortlist = shortlist[np.argsort(screen, kind="stable")][: SHORTLIST * SHORTLIST_ROUNDS]
     if len(first):
         ahead = np.asarray(first, dtype=int)
         shortlist = np.concatenate([ahead, shortlist[~np.isin(shortlist, ahead)]])

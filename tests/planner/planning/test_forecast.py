@@ -490,14 +490,19 @@ def test_the_recognition_ranks_a_halving_path_before_one_that_settles_a_class(mo
     assert ranking.expected_log[1] == pytest.approx(7 / 8 * math.log(7))
 
 
-def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best():
+def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best(monkeypatch):
     """A D shape alone, a required accuracy of 1 mm, the touches `lookahead`
     chose (two misses, then a hit): the recognition ranks a path ahead of the
     outcome model's best by the expected logarithm of the classes left while none
     of the paths it judged is predicted to leave fewer classes (some truths would
     split a class). The plan keeps the model's ranking; it used to fail looking
-    for the first path predicted to leave fewer (an error, a 500 over HTTP)."""
+    for the first path predicted to leave fewer (an error, a 500 over HTTP). The
+    shortlist is judged in the order it is made (the screen, which now finds a
+    path predicted to leave fewer here, turned off) to reach that state."""
     from planner.codec import observation_from_dict
+    from planner.planning import forecast
+
+    monkeypatch.setattr(forecast, "screened_log", lambda out, rows, *a: np.zeros(len(rows)))
     from planner.types import Accuracy
 
     models = [m for m in object_set("curved") if m.name == "d_shape"]
@@ -525,3 +530,69 @@ def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best():
     found = plan_session(session, (200.0, 0.0), StrategyConfig(name="lookahead", budget_ms=None), 3)
     assert found.paths and found.paths[0].scored_by == "outcome_model"
     assert "predicts a better path" not in (found.note or "")
+
+
+@pytest.mark.parametrize("name", ["thesis_like", "twins"])
+@settings(max_examples=8, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), touches=st.integers(1, 3))
+def test_the_shortlists_screen_counts_between_one_class_and_all(name, seed, touches):
+    """The screen's guess at the expected log of the classes left lies between
+    none split (log of the classes) and every one (0); a path every class misses
+    splits none; wider sensor bounds keep at least as many classes."""
+    from planner.planning.screen import screened_log
+
+    session = touched(name, BOUNDS[1], seed, touches)
+    if session.status != "ambiguous":
+        return
+    found = analysed(session)
+    posed, out = found.posed, found.outcomes
+    top = np.argsort(-posed.class_weight, kind="stable")[:4]
+    weight = posed.class_weight[top] / posed.class_weight[top].sum()
+    rows = np.arange(len(found.candidates.source))
+    screen = screened_log(out, rows, posed, top, weight, BOUNDS[1])
+    assert np.all(screen >= -1e-12) and np.all(screen <= math.log(posed.n_classes) + 1e-9)
+    missed = ~out.hit.any(axis=1)
+    np.testing.assert_allclose(screen[missed], math.log(posed.n_classes))
+    wider = screened_log(out, rows, posed, top, weight, SensorBounds(3.0, math.radians(9)))
+    assert np.all(wider >= screen - 1e-12)
+
+
+def test_the_screen_keeps_a_class_whose_outline_passes_the_contact_facing_it():
+    """Class 0 (a square) predicts a contact on its left face; class 1, the square
+    moved 1.5 mm right, keeps it at 1 mm (its outline within two position bounds,
+    its face turned alike) and loses it at 0.5 mm; class 2, the square turned a
+    half-turn about a point 100 mm off, lies far and loses it; class 3, a square
+    whose right face passes 0.5 mm from the contact facing away from it, loses
+    it; a miss keeps the classes that miss."""
+    from types import SimpleNamespace
+
+    from planner.planning.screen import screened_log
+
+    square = np.array([[-10.0, -10], [10, -10], [10, 10], [-10, 10]])
+    normals = np.array([[0.0, -1], [1, 0], [0, 1], [-1, 0]])
+
+    def faces(shift):
+        return square + shift, np.roll(square, -1, axis=0) + shift, normals
+
+    rings = [faces((0.0, 0.0)), faces((1.5, 0.0)), faces((200.0, 0.0)), faces((-19.5, 0.0))]
+    posed = SimpleNamespace(
+        start=np.stack([r[0] for r in rings]),
+        end=np.stack([r[1] for r in rings]),
+        normal=np.stack([r[2] for r in rings]),
+        valid=np.ones((4, 4), bool),
+        cls=np.arange(4),
+        weight=np.array([0.4, 0.3, 0.2, 0.1]),
+        class_weight=np.array([0.4, 0.3, 0.2, 0.1]),
+        n_classes=4,
+    )
+    nan = np.nan
+    out = SimpleNamespace(  # path 0 hits the left faces from the left, path 1 misses all
+        hit=np.array([[True, True, False, True], [False, False, False, False]]),
+        point=np.array([[[-10.0, 0.0], [-8.5, 0.0], [nan, nan], [-9.5, 0.0]], [[nan, nan]] * 4]),
+        normal=np.array([[[-1.0, 0.0], [-1.0, 0.0], [nan, nan], [1.0, 0.0]], [[nan, nan]] * 4]),
+    )
+    top, one = np.array([0]), np.array([1.0])
+    loose = screened_log(out, np.arange(2), posed, top, one, SensorBounds(1.0, 0.05))
+    tight = screened_log(out, np.arange(2), posed, top, one, SensorBounds(0.5, 0.05))
+    np.testing.assert_allclose(loose, [math.log(2), math.log(4)])
+    np.testing.assert_allclose(tight, [0.0, math.log(4)])

@@ -1,0 +1,112 @@
+"""A cheap first guess at what the recognition will conclude of a path (DESIGN §4.15).
+
+The recognition judges a candidate path with one update per predicting class, a
+few milliseconds each, so a plan judges a handful of its hundreds of candidates
+before its budget ends (:func:`planner.planning.forecast.recognition_ranking`).
+Which handful decides the touch. The screen guesses, from the cast alone, how
+many classes each predicted outcome leaves: class `j` survives class `k`'s
+nominal contact when `j`'s posed outline passes within two position bounds of
+it with a face whose normal lies within two normal bounds of the contact's
+(a measurement within the bounds of both could then be the one made); a miss
+keeps the classes that miss. Where `j` lies is its posed outline, not its own
+contact on the same path: the recognition refits every pose to every contact,
+so a class turned a little (a curved part's neighbour) slides to explain a
+contact its nominal one lies millimetres from, while a class without the bump
+the contact is on cannot. The pose bounds are left out: they allow far more
+than the refit does (classes 4 mm apart with 15 mm bounds are told apart).
+World frame, lengths in the object files' unit.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+from planner.compiled import c_array, segment_gap
+from planner.geometry import LENGTH_SLACK
+from planner.planning.outcomes import Outcomes
+from planner.planning.posed_set import PosedSet
+from planner.types import SensorBounds
+
+__all__ = ["SCREEN_CLASSES", "best_member", "screened_log"]
+
+#: Most classes a screened outcome counts (the most probable; the others are
+#: taken to survive every outcome).
+SCREEN_CLASSES = 32
+
+
+def best_member(posed: PosedSet, k: int) -> int:
+    """The most probable hypothesis of class `k`."""
+    members = np.flatnonzero(posed.cls == k)
+    return int(members[np.argmax(posed.weight[members])])
+
+
+def screened_log(
+    out: Outcomes,
+    rows: np.ndarray,
+    posed: PosedSet,
+    top: np.ndarray,
+    weight: np.ndarray,
+    sensor: SensorBounds,
+) -> np.ndarray:
+    """(n,) the guess at each candidate of `rows`' expected log of the classes
+    left: ``sum_k weight(k) log(classes left by k's outcome)`` over the
+    predicting classes `top` (their `weight` summing to 1)."""
+    classes = np.argsort(-posed.class_weight, kind="stable")[:SCREEN_CLASSES]
+    members = np.array([best_member(posed, int(k)) for k in classes], dtype=np.int64)
+    predict = np.array([best_member(posed, int(k)) for k in top], dtype=np.int64)
+    if len(rows) == 0:
+        return np.zeros(0)
+    reach = 2 * sensor.position_error + LENGTH_SLACK
+    cos_turn = math.cos(min(2 * sensor.normal_error, math.pi))
+    left = _left(
+        c_array(np.nan_to_num(out.point[np.ix_(rows, predict)]), float),
+        c_array(np.nan_to_num(out.normal[np.ix_(rows, predict)]), float),
+        c_array(out.hit[np.ix_(rows, predict)], np.bool_),
+        c_array(out.hit[np.ix_(rows, members)], np.bool_),
+        c_array(posed.start[members], float),
+        c_array(posed.end[members], float),
+        c_array(posed.normal[members], float),
+        c_array(posed.valid[members], np.bool_),
+        reach,
+        cos_turn,
+    )
+    left = left + (posed.n_classes - len(classes))
+    return np.log(np.maximum(left, 1)) @ weight
+
+
+@numba.njit(cache=True, nogil=True)
+def _left(point, normal, hit_k, hit_j, start, end, face_normal, valid, reach, cos_turn):  # type: ignore[no-untyped-def]
+    """(n, k) how many of the J classes (faces `start`, `end`, `face_normal`,
+    `valid` (J, F)) survive each predicted outcome (`point`, `normal` (n, k, 2),
+    `hit_k` (n, k)); `hit_j` (n, J) whether each class' own nominal outcome hits."""
+    n, k = hit_k.shape
+    n_cls, n_faces = valid.shape
+    left = np.zeros((n, k), dtype=np.int64)
+    reach_sq = reach * reach
+    for c in range(n):
+        for i in range(k):
+            count = 0
+            if not hit_k[c, i]:
+                for j in range(n_cls):
+                    count += not hit_j[c, j]
+                left[c, i] = count
+                continue
+            px, py = point[c, i, 0], point[c, i, 1]
+            nx, ny = normal[c, i, 0], normal[c, i, 1]
+            for j in range(n_cls):
+                for f in range(n_faces):
+                    if not valid[j, f]:
+                        continue
+                    if nx * face_normal[j, f, 0] + ny * face_normal[j, f, 1] < cos_turn:
+                        continue
+                    gx, gy = segment_gap(
+                        px, py, start[j, f, 0], start[j, f, 1], end[j, f, 0], end[j, f, 1]
+                    )
+                    if gx * gx + gy * gy <= reach_sq:
+                        count += 1
+                        break
+            left[c, i] = count
+    return left
