@@ -31,7 +31,9 @@ __all__ = ["UNIT_US", "Budget", "OutOfBudgetError"]
 #: leaf set valued one touch deep, and one recognition update in a forecast or a
 #: recognition-ranked path: a fixed part and a part per hypothesis it carries. The
 #: aims of candidate generation: a (point, face) pair examined for a boundary aim,
-#: a posed face put into the intersection area, a grid point x posed face of it.
+#: a posed face put into the intersection area, a grid point x posed face of it. One
+#: posed face a screened outcome is measured against (path x predicting class x
+#: counted class x face, :mod:`planner.planning.screen`).
 UNIT_US: dict[str, float] = {
     "outcome_cell": 13.0,
     "search_node": 200.0,
@@ -42,6 +44,7 @@ UNIT_US: dict[str, float] = {
     "aim_pair": 0.4,
     "aim_face": 5.0,
     "aim_cell": 0.008,
+    "screen_face": 0.006,
 }
 
 

@@ -225,7 +225,7 @@ def recognition_ranking(
     keep[: len(feature)] = True
     keep[len(feature) :] |= apart > 1.0
     shortlist = shortlist[keep]
-    screen = screened_log(out, shortlist, posed, top, weight, session.working_sensor)
+    screen = screened_log(out, shortlist, posed, top, weight, session.working_sensor, budget)
     shortlist = shortlist[np.argsort(screen, kind="stable")][: SHORTLIST * SHORTLIST_ROUNDS]
     if len(first):
         ahead = np.asarray(first, dtype=int)

@@ -26,6 +26,7 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 from planner.geometry import LENGTH_SLACK
+from planner.planning.budget import Budget
 from planner.planning.outcomes import Outcomes
 from planner.planning.posed_set import PosedSet
 from planner.types import SensorBounds
@@ -50,15 +51,27 @@ def screened_log(
     top: np.ndarray,
     weight: np.ndarray,
     sensor: SensorBounds,
+    budget: Budget | None = None,
 ) -> np.ndarray:
     """(n,) the guess at each candidate of `rows`' expected log of the classes
     left: ``sum_k weight(k) log(classes left by k's outcome)`` over the
-    predicting classes `top` (their `weight` summing to 1)."""
-    classes = np.argsort(-posed.class_weight, kind="stable")[:SCREEN_CLASSES]
+    predicting classes `top` (their `weight` summing to 1). The `budget` pays for
+    each (path, predicting class, counted class, face): the classes counted are
+    as many of the most probable as it affords (up to `SCREEN_CLASSES`), none
+    (all zeros: the order given stands) when it affords not one."""
+    faces = posed.start.shape[1]
+    per_class = len(rows) * len(top) * faces
+    counted = min(SCREEN_CLASSES, posed.n_classes)
+    affordable = math.inf if budget is None else budget.affordable("screen_face")
+    if per_class and math.isfinite(affordable):
+        counted = min(counted, int(affordable // per_class))
+    if len(rows) == 0 or counted < 1:
+        return np.zeros(len(rows))
+    if budget is not None:
+        budget.spend("screen_face", per_class * counted)
+    classes = np.argsort(-posed.class_weight, kind="stable")[:counted]
     members = np.array([best_member(posed, int(k)) for k in classes], dtype=np.int64)
     predict = np.array([best_member(posed, int(k)) for k in top], dtype=np.int64)
-    if len(rows) == 0:
-        return np.zeros(0)
     reach = 2 * sensor.position_error + LENGTH_SLACK
     cos_turn = math.cos(min(2 * sensor.normal_error, math.pi))
     left = _left(

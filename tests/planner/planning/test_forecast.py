@@ -596,3 +596,35 @@ def test_the_screen_keeps_a_class_whose_outline_passes_the_contact_facing_it():
     tight = screened_log(out, np.arange(2), posed, top, one, SensorBounds(0.5, 0.05))
     np.testing.assert_allclose(loose, [math.log(2), math.log(4)])
     np.testing.assert_allclose(tight, [0.0, math.log(4)])
+
+
+def test_the_screen_counts_only_the_classes_its_budget_pays_for():
+    """Each (path, predicting class, counted class, face) costs a `screen_face`
+    unit: the screen counts as many classes as the budget affords and spends for
+    them; affording none, it leaves the order as given (all zeros) and spends
+    nothing."""
+    from planner.planning.budget import UNIT_US
+    from planner.planning.screen import SCREEN_CLASSES, screened_log
+
+    session = touched("thesis_like", BOUNDS[1], 4, 1)
+    found = analysed(session)
+    posed, out = found.posed, found.outcomes
+    assert posed.n_classes > 3
+    top = np.argsort(-posed.class_weight, kind="stable")[:4]
+    weight = posed.class_weight[top] / posed.class_weight[top].sum()
+    rows = np.arange(len(found.candidates.source))
+    per_class = len(rows) * len(top) * posed.start.shape[1]
+    free = screened_log(out, rows, posed, top, weight, BOUNDS[1])
+    poor = Budget(work=0.5 * per_class * UNIT_US["screen_face"])
+    assert np.all(screened_log(out, rows, posed, top, weight, BOUNDS[1], poor) == 0)
+    assert poor.units == 0
+    three = Budget(work=3.5 * per_class * UNIT_US["screen_face"])
+    some = screened_log(out, rows, posed, top, weight, BOUNDS[1], three)
+    assert three.spent["screen_face"] == 3 * per_class
+    # classes left uncounted survive every outcome: the guess splits no more
+    assert np.all(some >= free - 1e-12)
+    rich = Budget(work=1e12)
+    np.testing.assert_array_equal(
+        screened_log(out, rows, posed, top, weight, BOUNDS[1], rich), free
+    )
+    assert rich.spent["screen_face"] == min(SCREEN_CLASSES, posed.n_classes) * per_class
