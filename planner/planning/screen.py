@@ -26,16 +26,20 @@ import numpy as np
 
 from planner.compiled import c_array, segment_gap
 from planner.geometry import LENGTH_SLACK
-from planner.planning.budget import Budget
+from planner.planning.budget import UNIT_US, Budget
 from planner.planning.outcomes import Outcomes
 from planner.planning.posed_set import PosedSet
 from planner.types import SensorBounds
 
-__all__ = ["SCREEN_CLASSES", "best_member", "screened_log"]
+__all__ = ["SCREEN_CLASSES", "SCREEN_FLOOR", "best_member", "screened_log"]
 
 #: Most classes a screened outcome counts (the most probable; the others are
 #: taken to survive every outcome).
 SCREEN_CLASSES = 32
+#: Units the screen may spend when the plan's budget affords less (half of one
+#: predicted update's fixed part).
+SCREEN_FLOOR = 4000.0
+UNIT = UNIT_US["screen_face"]
 
 
 def best_member(posed: PosedSet, k: int) -> int:
@@ -56,21 +60,22 @@ def screened_log(
     """(n,) the guess at each candidate of `rows`' expected log of the classes
     left: ``sum_k weight(k) log(classes left by k's outcome)`` over the
     predicting classes `top` (their `weight` summing to 1). The `budget` pays for
-    each (path, predicting class, counted class, face): the classes counted are
-    as many of the most probable as it affords (up to `SCREEN_CLASSES`), none
-    (all zeros: the order given stands) when it affords not one."""
-    faces = posed.start.shape[1]
-    per_class = len(rows) * len(top) * faces
-    counted = min(SCREEN_CLASSES, posed.n_classes)
+    each (path, predicting class, counted class' face): the classes counted are
+    as many of the most probable (up to `SCREEN_CLASSES`) as it affords, or as
+    `SCREEN_FLOOR` units pay for when it affords less (a plan whose budget is
+    spent still judges one path, and the screen picks it, for half the cost of
+    one predicted update); none when not even the first fits (all zeros: the
+    order given stands)."""
+    order = np.argsort(-posed.class_weight, kind="stable")[: min(SCREEN_CLASSES, posed.n_classes)]
+    members = np.array([best_member(posed, int(k)) for k in order], dtype=np.int64)
+    cells = len(rows) * len(top) * np.cumsum(posed.valid[members].sum(axis=1))
     affordable = math.inf if budget is None else budget.affordable("screen_face")
-    if per_class and math.isfinite(affordable):
-        counted = min(counted, int(affordable // per_class))
+    counted = int(np.searchsorted(cells, max(affordable, SCREEN_FLOOR / UNIT), side="right"))
     if len(rows) == 0 or counted < 1:
         return np.zeros(len(rows))
     if budget is not None:
-        budget.spend("screen_face", per_class * counted)
-    classes = np.argsort(-posed.class_weight, kind="stable")[:counted]
-    members = np.array([best_member(posed, int(k)) for k in classes], dtype=np.int64)
+        budget.spend("screen_face", float(cells[counted - 1]))
+    members = members[:counted]
     predict = np.array([best_member(posed, int(k)) for k in top], dtype=np.int64)
     reach = 2 * sensor.position_error + LENGTH_SLACK
     cos_turn = math.cos(min(2 * sensor.normal_error, math.pi))
@@ -86,7 +91,7 @@ def screened_log(
         reach,
         cos_turn,
     )
-    left = left + (posed.n_classes - len(classes))
+    left = left + (posed.n_classes - counted)
     return np.log(np.maximum(left, 1)) @ weight
 
 

@@ -598,13 +598,13 @@ def test_the_screen_keeps_a_class_whose_outline_passes_the_contact_facing_it():
     np.testing.assert_allclose(tight, [0.0, math.log(4)])
 
 
-def test_the_screen_counts_only_the_classes_its_budget_pays_for():
-    """Each (path, predicting class, counted class, face) costs a `screen_face`
-    unit: the screen counts as many classes as the budget affords and spends for
-    them; affording none, it leaves the order as given (all zeros) and spends
-    nothing."""
+def test_the_screen_counts_only_the_classes_its_budget_pays_for(monkeypatch):
+    """Each (path, predicting class, counted class' face) costs a `screen_face`
+    unit: the screen counts as many of the most probable classes as the budget
+    affords (or its floor pays for) and spends for them; affording none, it
+    leaves the order as given (all zeros) and spends nothing."""
+    from planner.planning import screen
     from planner.planning.budget import UNIT_US
-    from planner.planning.screen import SCREEN_CLASSES, screened_log
 
     session = touched("thesis_like", BOUNDS[1], 4, 1)
     found = analysed(session)
@@ -613,18 +613,22 @@ def test_the_screen_counts_only_the_classes_its_budget_pays_for():
     top = np.argsort(-posed.class_weight, kind="stable")[:4]
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
     rows = np.arange(len(found.candidates.source))
-    per_class = len(rows) * len(top) * posed.start.shape[1]
-    free = screened_log(out, rows, posed, top, weight, BOUNDS[1])
-    poor = Budget(work=0.5 * per_class * UNIT_US["screen_face"])
-    assert np.all(screened_log(out, rows, posed, top, weight, BOUNDS[1], poor) == 0)
+    order = np.argsort(-posed.class_weight, kind="stable")[: screen.SCREEN_CLASSES]
+    faces = [posed.valid[screen.best_member(posed, int(k))].sum() for k in order]
+    cells = len(rows) * len(top) * np.cumsum(faces)
+    free = screen.screened_log(out, rows, posed, top, weight, BOUNDS[1])
+    # a spent budget: the floor pays for the screen (here every class fits in it)
+    spent = Budget(work=0.0)
+    floor = screen.screened_log(out, rows, posed, top, weight, BOUNDS[1], spent)
+    assert cells[-1] * UNIT_US["screen_face"] <= screen.SCREEN_FLOOR
+    np.testing.assert_array_equal(floor, free)
+    assert spent.spent["screen_face"] == cells[-1]
+    monkeypatch.setattr(screen, "SCREEN_FLOOR", 0.0)
+    poor = Budget(work=0.5 * cells[0] * UNIT_US["screen_face"])
+    assert np.all(screen.screened_log(out, rows, posed, top, weight, BOUNDS[1], poor) == 0)
     assert poor.units == 0
-    three = Budget(work=3.5 * per_class * UNIT_US["screen_face"])
-    some = screened_log(out, rows, posed, top, weight, BOUNDS[1], three)
-    assert three.spent["screen_face"] == 3 * per_class
+    three = Budget(work=(cells[2] + 1) * UNIT_US["screen_face"])
+    some = screen.screened_log(out, rows, posed, top, weight, BOUNDS[1], three)
+    assert three.spent["screen_face"] == cells[2]
     # classes left uncounted survive every outcome: the guess splits no more
     assert np.all(some >= free - 1e-12)
-    rich = Budget(work=1e12)
-    np.testing.assert_array_equal(
-        screened_log(out, rows, posed, top, weight, BOUNDS[1], rich), free
-    )
-    assert rich.spent["screen_face"] == min(SCREEN_CLASSES, posed.n_classes) * per_class
