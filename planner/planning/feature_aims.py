@@ -40,9 +40,7 @@ def _class_outlines(posed: PosedSet, limit: int) -> list[shapely.Polygon]:
     """The posed outline of each of the `limit` most probable classes' best member."""
     order = np.argsort(-posed.class_weight, kind="stable")[:limit]
     out = []
-    for k in order:
-        members = np.flatnonzero(posed.cls == k)
-        best = members[np.argmax(posed.weight[members])]
+    for best in posed.best_members(order):
         outline, holes = posed.rings[best]
         out.append(shapely.buffer(shapely.Polygon(outline, holes), 0))
     return out

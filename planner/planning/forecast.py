@@ -42,7 +42,7 @@ from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
-from planner.planning.screen import best_member, screened_log
+from planner.planning.screen import screened_log
 from planner.recognition.session import Session
 from planner.types import Contact, Hypothesis, Observation, SensingPath, SensorBounds
 
@@ -210,13 +210,13 @@ def recognition_ranking(
     current = posed.n_classes
     top = np.argsort(-posed.class_weight, kind="stable")[:classes]
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
-    best = [best_member(posed, int(k)) for k in top]
+    best = posed.best_members(top)
     # the paths aimed at the classes' differences in the order they were made (one
     # per feature first), then the others where the classes' outcomes differ most;
     # then the likeliest splits first by the screen
     feature = np.flatnonzero(cands.source == "feature")
     other = np.flatnonzero(cands.source != "feature")
-    apart = _outcomes_apart(out, other, np.array(best), session.working_sensor)
+    apart = _outcomes_apart(out, other, best, session.working_sensor)
     order = np.lexsort((found.motion[other], -found.info.p_informative[other], -apart))
     other, apart = other[order], apart[order]
     # past the first `SHORTLIST`, only paths where the outcomes lie over a bound apart

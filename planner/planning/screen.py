@@ -31,7 +31,7 @@ from planner.planning.outcomes import Outcomes
 from planner.planning.posed_set import PosedSet
 from planner.types import SensorBounds
 
-__all__ = ["SCREEN_CLASSES", "SCREEN_FLOOR", "best_member", "screened_log"]
+__all__ = ["SCREEN_CLASSES", "SCREEN_FLOOR", "screened_log"]
 
 #: Most classes a screened outcome counts (the most probable; the others are
 #: taken to survive every outcome).
@@ -39,13 +39,6 @@ SCREEN_CLASSES = 32
 #: Units the screen may spend when the plan's budget affords less (half of one
 #: predicted update's fixed part).
 SCREEN_FLOOR = 4000.0
-UNIT = UNIT_US["screen_face"]
-
-
-def best_member(posed: PosedSet, k: int) -> int:
-    """The most probable hypothesis of class `k`."""
-    members = np.flatnonzero(posed.cls == k)
-    return int(members[np.argmax(posed.weight[members])])
 
 
 def screened_log(
@@ -67,16 +60,17 @@ def screened_log(
     one predicted update); none when not even the first fits (all zeros: the
     order given stands)."""
     order = np.argsort(-posed.class_weight, kind="stable")[: min(SCREEN_CLASSES, posed.n_classes)]
-    members = np.array([best_member(posed, int(k)) for k in order], dtype=np.int64)
+    members = posed.best_members(order)
     cells = len(rows) * len(top) * np.cumsum(posed.valid[members].sum(axis=1))
     affordable = math.inf if budget is None else budget.affordable("screen_face")
-    counted = int(np.searchsorted(cells, max(affordable, SCREEN_FLOOR / UNIT), side="right"))
+    floor = SCREEN_FLOOR / UNIT_US["screen_face"]
+    counted = int(np.searchsorted(cells, max(affordable, floor), side="right"))
     if len(rows) == 0 or counted < 1:
         return np.zeros(len(rows))
     if budget is not None:
         budget.spend("screen_face", float(cells[counted - 1]))
     members = members[:counted]
-    predict = np.array([best_member(posed, int(k)) for k in top], dtype=np.int64)
+    predict = posed.best_members(top)
     reach = 2 * sensor.position_error + LENGTH_SLACK
     cos_turn = math.cos(min(2 * sensor.normal_error, math.pi))
     left = _left(

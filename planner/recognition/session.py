@@ -128,6 +128,23 @@ class Session:
         )
         self.length_scale = max(g.stable.centroid_radius for g in self._groups)
         self.accuracy = accuracy or self._default_accuracy()
+        # what a parent session holds it has checked; a session built from a log checks all
+        held = len(_parent.observations) if _parent is not None else 0
+        for observation in self.observations[held:]:
+            self._check(observation)
+
+    def _check(self, observation: Observation) -> None:
+        """Refuse a path height some object has no slice at, and a contact lying
+        behind the path's origin by more than the position error (a part within
+        the error of the origin may put a measured contact there)."""
+        check_height(self.models, observation.path.height)
+        length = max(1.0, observation.path.length)
+        slack = self.working_sensor.position_error + LENGTH_SLACK * length
+        if observation.behind_origin() > slack:
+            raise InvalidObservationError(
+                "contact lies behind the path origin by more than the position error",
+                field="contact.point",
+            )
 
     def _default_accuracy(self) -> Accuracy:
         """:meth:`Accuracy.default_for` the sensor; with the thesis' fixed error disk,
@@ -152,14 +169,6 @@ class Session:
         return self._after(observation, dataclasses.replace(self.config, residual_fitness=False))
 
     def _after(self, observation: Observation, config: RecognitionConfig) -> Session:
-        check_height(self.models, observation.path.height)
-        length = max(1.0, observation.path.length)
-        slack = self.working_sensor.position_error + LENGTH_SLACK * length
-        if observation.behind_origin() > slack:
-            raise InvalidObservationError(
-                "contact lies behind the path origin by more than the position error",
-                field="contact.point",
-            )
         return Session(
             self.given_models,
             self.sensor,

@@ -566,6 +566,7 @@ def test_the_screen_keeps_a_class_whose_outline_passes_the_contact_facing_it():
     it; a miss keeps the classes that miss."""
     from types import SimpleNamespace
 
+    from planner.planning.posed_set import PosedSet
     from planner.planning.screen import screened_log
 
     square = np.array([[-10.0, -10], [10, -10], [10, 10], [-10, 10]])
@@ -585,6 +586,7 @@ def test_the_screen_keeps_a_class_whose_outline_passes_the_contact_facing_it():
         class_weight=np.array([0.4, 0.3, 0.2, 0.1]),
         n_classes=4,
     )
+    posed.best_members = lambda classes: PosedSet.best_members(posed, classes)
     nan = np.nan
     out = SimpleNamespace(  # path 0 hits the left faces from the left, path 1 misses all
         hit=np.array([[True, True, False, True], [False, False, False, False]]),
@@ -614,7 +616,7 @@ def test_the_screen_counts_only_the_classes_its_budget_pays_for(monkeypatch):
     weight = posed.class_weight[top] / posed.class_weight[top].sum()
     rows = np.arange(len(found.candidates.source))
     order = np.argsort(-posed.class_weight, kind="stable")[: screen.SCREEN_CLASSES]
-    faces = [posed.valid[screen.best_member(posed, int(k))].sum() for k in order]
+    faces = posed.valid[posed.best_members(order)].sum(axis=1)
     cells = len(rows) * len(top) * np.cumsum(faces)
     free = screen.screened_log(out, rows, posed, top, weight, BOUNDS[1])
     # a spent budget: the floor pays for the screen (here every class fits in it)

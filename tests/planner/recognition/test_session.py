@@ -225,6 +225,12 @@ def test_a_contact_measured_behind_an_origin_at_the_part_is_kept_within_the_erro
     assert session.status == "localized"
     best = session.hypotheses[0]
     assert math.hypot(best.pose.x, best.pose.y) <= best.error_bound.eps_t / 2 + 1e-9
+    far = _obs((0, -40.3), (0, 1), (0.2, -42.5), (0, -1))
     with pytest.raises(InvalidObservationError) as refused:
-        session.observe(_obs((0, -40.3), (0, 1), (0.2, -42.5), (0, -1)))
+        session.observe(far)
     assert refused.value.field == "contact.point"
+    # a session built from a log checks every observation, the last included
+    square = _by_name("square")
+    with pytest.raises(InvalidObservationError):
+        Session(square, SensorBounds(1.0, math.radians(3)), WORKSPACE, observations=[near, far])
+    assert len(Session(square, SensorBounds(1.0, 0.05), WORKSPACE, observations=[near]).hypotheses)
