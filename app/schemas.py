@@ -87,7 +87,9 @@ class HypothesisOut(BaseModel):
     error_bound: ErrorBoundOut
     probability: float = Field(ge=0, le=1)
     assignment: list[int | None] = Field(
-        description="face index per contact, in contact order; null = spurious contact"
+        description="face index per contact, in contact order; null = spurious contact. "
+        "Where a part's interpretations multiply on a finely drawn curve, a contact whose "
+        "rows differed only in neighbouring faces is folded: it names the first of them"
     )
     equivalence_class: int = Field(ge=0, description="0 = the most probable class")
 

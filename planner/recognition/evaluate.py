@@ -133,11 +133,14 @@ class _Contacts:
 @dataclass(frozen=True, eq=False)
 class _Gated:
     """The rows of one group that assign a contact and pass the rotation gate:
-    `keep` their indices among the group's rows, `face` and `assigned` (K, s)."""
+    `keep` their indices among the group's rows, `face` and `assigned` (K, s), and
+    `spurious` (K, s) the contacts they call spurious (a folded contact is unassigned
+    but not spurious: :func:`~planner.recognition.tree.fold_runs`)."""
 
     keep: np.ndarray
     face: np.ndarray
     assigned: np.ndarray
+    spurious: np.ndarray
 
 
 def _gated(rows: np.ndarray, faces: Faces, psi: np.ndarray, phi: float) -> _Gated | None:
@@ -151,7 +154,7 @@ def _gated(rows: np.ndarray, faces: Faces, psi: np.ndarray, phi: float) -> _Gate
     gate = rotation_gate(psi, faces.angle[face], assigned, phi)
     if not gate.any():
         return None
-    return _Gated(keep[gate], face[gate], assigned[gate])
+    return _Gated(keep[gate], face[gate], assigned[gate], rows[gate] == -1)
 
 
 def evaluate_groups(
@@ -236,8 +239,9 @@ def evaluate_groups(
         )  # fmt: skip
     prior = np.array([g.prior for g in stack.groups])[stack.group[src]]
     weight = weights(
-        prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config
-    )
+        prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config,
+        stack.spurious[src],
+    )  # fmt: skip
     keep = stack.keep[src]
     for j, (_, ss) in enumerate(parts):
         sel = np.flatnonzero(ok[ss] & (weight[ss] > 0)) + ss.start
@@ -252,8 +256,8 @@ def evaluate_groups(
 class _Stack:
     """The gated rows of several groups stacked in group order (K rows): each
     group's faces in one table (`faces`, the group's face numbers moved past the
-    faces of the groups before it: `face` (K, s)), `assigned` (K, s), `keep` (K,)
-    each row's index among its group's rows, `group` (K,) its place in `groups`;
+    faces of the groups before it: `face` (K, s)), `assigned` and `spurious` (K, s),
+    `keep` (K,) each row's index among its group's rows, `group` (K,) its place in `groups`;
     per group its rows' `counts`, its own face numbers and assignments."""
 
     groups: list[Group]
@@ -263,6 +267,7 @@ class _Stack:
     faces: Faces
     face: np.ndarray
     assigned: np.ndarray
+    spurious: np.ndarray
     keep: np.ndarray
     group: np.ndarray
 
@@ -285,6 +290,7 @@ class _Stack:
             faces,
             np.concatenate([x.face + m for x, m in zip(gated, moved, strict=True)]),
             np.concatenate([x.assigned for x in gated]),
+            np.concatenate([x.spurious for x in gated]),
             np.concatenate([x.keep for x in gated]),
             np.repeat(np.arange(len(groups)), counts),
         )

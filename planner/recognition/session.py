@@ -44,7 +44,7 @@ from planner.recognition.equivalence import (
     equivalence_classes,
 )
 from planner.recognition.evaluate import PoseSamples, evaluate_groups
-from planner.recognition.tree import Group, TreeLevel, extend, make_groups
+from planner.recognition.tree import Group, TreeLevel, extend, face_of, fold_runs, make_groups
 from planner.types import (
     Accuracy,
     ErrorBound,
@@ -82,8 +82,13 @@ class Localization:
 
 @dataclass(frozen=True, eq=False)
 class _Derived:
+    """The checked rows of the tree (`level`), their posed samples, and the rows the
+    next observation extends (`ahead`: the level with its contacts folded where the
+    rows of a group multiply, :func:`~planner.recognition.tree.fold_runs`)."""
+
     level: TreeLevel
     candidates: tuple[PoseSamples, ...]
+    ahead: TreeLevel
 
 
 class Session:
@@ -229,14 +234,14 @@ class Session:
         interpretation is checked (None without observations): table lookups only."""
         parent_level: TreeLevel | None
         if self._parent is not None:
-            parent_level = self._parent._derived.level
+            parent_level = self._parent._derived.ahead
         elif not self.observations:
             parent_level = None
         else:
             prefix = Session(self.given_models, self.sensor, self.workspace, self.config)
             for obs in self.observations[:-1]:
                 prefix = prefix.observe(obs)
-            parent_level = prefix._derived.level
+            parent_level = prefix._derived.ahead
         if parent_level is None:  # no observation at all
             return None
         last = self.observations[-1]
@@ -266,8 +271,8 @@ class Session:
     def _derived(self) -> _Derived:
         level = self._extended
         if level is None:  # no observation at all
-            empty = tuple(np.zeros((1, 0), np.int64) for _ in self._groups)
-            return _Derived(TreeLevel(rows=empty), ())
+            empty = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in self._groups))
+            return _Derived(empty, (), empty)
         found = evaluate_groups(
             self._groups,
             level.rows,
@@ -288,7 +293,11 @@ class Session:
             remap[keep] = np.arange(len(keep))
             rows_kept.append(rows[keep])
             candidates.append(_reindex(cand, remap[cand.row]))
-        return _Derived(TreeLevel(tuple(rows_kept)), tuple(candidates))
+        ahead = [
+            fold_runs(r, g.stable.all_faces.ring)
+            for r, g in zip(rows_kept, self._groups, strict=True)
+        ]
+        return _Derived(TreeLevel(tuple(rows_kept)), tuple(candidates), TreeLevel(tuple(ahead)))
 
     @property
     def hypothesis_count(self) -> int:
@@ -456,8 +465,9 @@ def _reindex(c: PoseSamples, rows: np.ndarray) -> PoseSamples:
 
 
 def _face_or_none(row: list[int]) -> list[int | None]:
-    """A row of the tree as a hypothesis' assignment: None for a spurious contact."""
-    return [f if f >= 0 else None for f in row]
+    """A row of the tree as a hypothesis' assignment: None for a spurious contact, the
+    first of its faces for a folded one."""
+    return [face_of(f) for f in row]
 
 
 def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:

@@ -102,12 +102,15 @@ def weights(
     directions: np.ndarray,
     fitness: np.ndarray,
     config: RecognitionConfig,
+    spurious: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N,) unnormalized posterior weight of each sample.
 
     `prior` of the group; `face`, `assigned` (N, s) each sample's faces and which
     contacts it assigns; `directions` (s, 2) the unit directions of the paths that
-    met the contacts; `fitness` (N,) from :func:`residual_fitness`.
+    met the contacts; `fitness` (N,) from :func:`residual_fitness`; `spurious`
+    (N, s) the contacts it calls spurious, each weighed by the outlier probability
+    (default: every contact it leaves unassigned; a folded one is not spurious).
     """
     fit, src = pose.fit, samples.src
     Rs = rotation_matrices(samples.theta)
@@ -120,7 +123,8 @@ def weights(
     family, cell, span_scale = samples.family[src], samples.cell[src], samples.span_scale[src]
     volume = np.where(family, volume * cell * span_scale / pose.sigma_d, volume)
     weight = prior * incidence * volume * fitness
-    weight *= config.outlier_probability ** (~assigned).sum(axis=1)
+    spurious = ~assigned if spurious is None else spurious
+    weight *= config.outlier_probability ** spurious.sum(axis=1)
     if config.likelihood == "gaussian":
         weight *= np.exp(-0.5 * fit.chi2[src])
     return weight

@@ -26,7 +26,9 @@ T = TypeVar("T", bound="HypothesisOut")
 class HypothesisOut:
     """ 
         Attributes:
-            assignment (list[int | None]): face index per contact, in contact order; null = spurious contact
+            assignment (list[int | None]): face index per contact, in contact order; null = spurious contact. Where a part's
+                interpretations multiply on a finely drawn curve, a contact whose rows differed only in neighbouring faces is
+                folded: it names the first of them
             equivalence_class (int): 0 = the most probable class
             error_bound (ErrorBoundOut): |dt| of the translation, |dtheta| (radians) and the error disk diameter eps_t.
             object_ (str):
