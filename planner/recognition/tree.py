@@ -64,6 +64,15 @@ class Group:
         """Each layer's outline and holes as a key (its numbers' digest)."""
         return [array_key((layer.outline, *layer.holes)) for layer in self.stable.layers]
 
+    def __getstate__(self) -> dict:
+        """Pickled without what it derives from its stable pose (the constraint tables
+        are nine tenths of a curved part's session snapshot; a restored group finds
+        them again, shared between sessions)."""
+        state = dict(self.__dict__)
+        state.pop("tables", None)
+        state.pop("_layer_keys", None)
+        return state
+
 
 #: Edges of shrunk outlines the process keeps (a few megabytes; a part shrunk at
 #: every tolerance step holds tens of thousands).

@@ -119,3 +119,30 @@ def test_a_long_session_on_a_drawn_curve_stays_sound_and_bounded(seed: int) -> N
     # the checked rows of a level come from at most FOLD_ROWS folded rows, each
     # extended by the few chords one contact fits
     assert most <= 8 * FOLD_ROWS
+
+
+def test_a_restored_snapshot_continues_as_the_session_and_holds_no_tables() -> None:
+    """A snapshot leaves out the constraint tables its groups derive from their
+    stable poses (nine tenths of a curved part's snapshot): the restored session
+    finds them again and its next update is the original's to the last digit."""
+    from planner.recognition.snapshot import restore, snapshot
+
+    models = load_objects("curved")
+    rng = np.random.default_rng(3)
+    world = random_world(models, WORKSPACE, rng)
+    session = Session(models, BOUNDS, WORKSPACE)
+    for _ in range(2):
+        session = session.observe(world.execute(world.hitting_path(rng), BOUNDS, rng)[0])
+    session.hypotheses  # noqa: B018 - derived, so the groups hold their tables
+    assert all("tables" in g.__dict__ for g in session._groups)
+    again = restore(snapshot(session))
+    assert again is not None
+    assert not any("tables" in g.__dict__ for g in again._groups)
+    obs = world.execute(world.hitting_path(rng), BOUNDS, rng)[0]
+
+    def answer(s: Session) -> list:
+        return [
+            (h.object, h.assignment, h.pose, h.error_bound, h.probability) for h in s.hypotheses
+        ]
+
+    assert answer(again.observe(obs)) == answer(session.observe(obs))
