@@ -338,7 +338,7 @@ class Session:
         for c in cands:
             group = self._groups[c.group]
             assignments = [
-                tuple(row) if min(row, default=0) >= 0 else tuple(_face_or_none(row))
+                tuple(row) if min(row, default=0) >= 0 else tuple(face_of(f) for f in row)
                 for row in level.rows[c.group][c.row].tolist()
             ]
             columns = zip(
@@ -462,12 +462,6 @@ def _reindex(c: PoseSamples, rows: np.ndarray) -> PoseSamples:
     return PoseSamples(
         c.group, rows, c.theta, c.t, c.d_translation, c.d_theta, c.eps_t, c.cell, c.weight
     )
-
-
-def _face_or_none(row: list[int]) -> list[int | None]:
-    """A row of the tree as a hypothesis' assignment: None for a spurious contact, the
-    first of its faces for a folded one."""
-    return [face_of(f) for f in row]
 
 
 def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:

@@ -459,6 +459,13 @@ def test_weights_multiply_the_outlier_probability_per_spurious_contact():
     one_out = weights(1.0, pose, samples, f, face, np.array([[True, False]]), dirs, ones, CONFIG)
     assert full[0] > 0
     np.testing.assert_allclose(one_out / full, CONFIG.outlier_probability, rtol=1e-12)
+    # a folded contact is unassigned but not spurious: it weighs as nothing, not as
+    # an outlier (tree.fold_runs)
+    none = np.array([[False, False]])
+    folded = weights(
+        1.0, pose, samples, f, face, np.array([[True, False]]), dirs, ones, CONFIG, none
+    )
+    np.testing.assert_allclose(folded, one_out / CONFIG.outlier_probability, rtol=1e-12)
 
 
 def test_residual_fitness_is_one_for_exact_contacts_and_less_on_the_edges():
