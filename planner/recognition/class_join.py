@@ -16,8 +16,10 @@ so a class still never chains; a member lies within ``tau`` of its leader
 
 Cost: only classes whose leaders' support values (:data:`SUPPORT_DIRECTIONS`)
 lie within ``tau`` are candidates (outlines within d have support values within
-d), and the pairs measured are bounded in advance by `JOIN_POINTS`; a pair of
-classes beyond what is left stays apart (more classes, never a wrong one).
+d); they are measured together, one array pass per two stable poses (a joined
+class is then judged from the pairs of the classes it took in), and the pairs
+measured are bounded in advance by `JOIN_POINTS`; a pair of classes beyond what
+is left stays apart (more classes, never a wrong one).
 
 >>> from planner.models.library import object_from_dict
 >>> sq = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
@@ -76,27 +78,30 @@ def join_classes(
     place = np.empty(n, dtype=np.int64)
     place[np.asarray(order, dtype=np.int64)] = np.arange(n)
     by_class = np.lexsort((place, label))
-    members = np.split(by_class, np.searchsorted(label[by_class], np.arange(1, count)))
-    leaders = np.array([m[0] for m in members])
+    starts = np.searchsorted(label[by_class], np.arange(count + 1))
+    leaders = by_class[starts[:-1]]
     tree = cKDTree(support[leaders])
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
     near = tree.query_pairs(reach, p=np.inf, output_type="ndarray")
+    near = near[np.lexsort((near[:, 1], near[:, 0]))]
+    size = np.diff(starts)
+    points_of = np.add.reduceat(points[by_class], starts[:-1])
+    apart = _apart_families(family, by_class, starts, near)
+    cost = size[near[:, 0]] * points_of[near[:, 1]] + size[near[:, 1]] * points_of[near[:, 0]]
+    measured = near[_within_budget(np.where(apart, cost, max_points + 1), max_points)]
+    close = measured[_all_within(rings, group, local, by_class, starts, measured, tau)]
+    within = set(map(tuple, close.tolist()))
     into = np.arange(count)
     wide = np.zeros(count, dtype=bool)
-    left = max_points
-    for a, b in near[np.lexsort((near[:, 1], near[:, 0]))]:
+    held: list[list[int]] = [[c] for c in range(count)]  # the classes each leader took in
+    for a, b in close.tolist():
         if into[a] != a or into[b] != b:  # a class joins at most once, into a leader
             continue
-        mine, theirs = members[a], members[b]
-        if not _disjoint(family[mine], family[theirs]):
-            continue
-        cost = len(mine) * int(points[theirs].sum()) + len(theirs) * int(points[mine].sum())
-        if cost > left:
-            continue
-        left -= cost
-        if _all_within(rings, group, local, mine, theirs, tau):
-            members[a] = np.concatenate([mine, theirs])
+        # b's leader comes after a's: b took in nothing yet, and every class a took
+        # in has a smaller number than b
+        if all((c, b) in within for c in held[a][1:]):
+            held[a].append(b)
             into[b], wide[a] = a, True
     joined = into[label]
     # classes numbered as their leaders come in `order`
@@ -108,34 +113,53 @@ def join_classes(
     return rank[joined], wide[kept[np.argsort(first[kept], kind="stable")]]
 
 
+def _within_budget(cost: np.ndarray, budget: int) -> np.ndarray:
+    """(M,) bool: the pairs measured, in order, each while its cost (M,) still fits
+    in what the ones before it left of `budget` (a pair too dear is passed over,
+    a cheaper one after it may still fit)."""
+    keep = np.zeros(len(cost), dtype=bool)
+    left = budget
+    for i, c in enumerate(cost.tolist()):
+        if c <= left:
+            keep[i], left = True, left - c
+    return keep
+
+
+def _apart_families(
+    family: np.ndarray, by_class: np.ndarray, starts: np.ndarray, pairs: np.ndarray
+) -> np.ndarray:
+    """(M,) bool: do the two classes of each pair (M, 2) hold no slide family in common?"""
+    fam = {
+        c: set(family[by_class[starts[c] : starts[c + 1]]].tolist())
+        for c in np.unique(pairs).tolist()
+    }
+    return np.array([fam[a].isdisjoint(fam[b]) for a, b in pairs.tolist()], dtype=bool)
+
+
 def _all_within(
     rings: Sequence[PosedRings],
     group: np.ndarray,
     local: np.ndarray,
-    mine: np.ndarray,
-    theirs: np.ndarray,
+    by_class: np.ndarray,
+    starts: np.ndarray,
+    pairs: np.ndarray,
     tau: float,
-) -> bool:
-    """Does every hypothesis of `mine` lie within `tau` of every one of `theirs`?
-    Measured one pass per two stable poses (most classes hold one hypothesis, or
-    hypotheses of one stable pose: one pass)."""
-    mine_groups, their_groups = group[mine], group[theirs]
-    for ga in _distinct(mine_groups):
-        ia = local[mine[mine_groups == ga]] if len(mine) > 1 else local[mine]
-        for gb in _distinct(their_groups):
-            ib = local[theirs[their_groups == gb]] if len(theirs) > 1 else local[theirs]
-            a, b = np.repeat(ia, len(ib)), np.tile(ib, len(ia))
-            if not pairs_within(rings[ga], a, rings[gb], b, tau).all():
-                return False
-    return True
-
-
-def _distinct(values: np.ndarray) -> list[int]:
-    """The distinct values, ascending (one without a sort when all are equal)."""
-    first = int(values[0])
-    return [first] if (values == first).all() else np.unique(values).tolist()
-
-
-def _disjoint(a: np.ndarray, b: np.ndarray) -> bool:
-    """No value in both (few values: sets, not sorts)."""
-    return set(a.tolist()).isdisjoint(b.tolist())
+) -> np.ndarray:
+    """(M,) bool: does every hypothesis of the first class of each pair (M, 2) lie
+    within `tau` of every one of the second? The members of class c are
+    ``by_class[starts[c]:starts[c + 1]]``. All pairs measured together, one pass per
+    two stable poses."""
+    size = np.diff(starts)
+    sa, sb = size[pairs[:, 0]], size[pairs[:, 1]]
+    span = sa * sb
+    pair = np.repeat(np.arange(len(pairs)), span)
+    k = np.arange(int(span.sum())) - np.repeat(np.cumsum(span) - span, span)
+    i = by_class[starts[pairs[pair, 0]] + k // sb[pair]]
+    j = by_class[starts[pairs[pair, 1]] + k % sb[pair]]
+    ok = np.ones(len(pair), dtype=bool)
+    key = group[i] * len(rings) + group[j]
+    for g in np.unique(key).tolist():
+        sel = np.flatnonzero(key == g)
+        ga, gb = divmod(g, len(rings))
+        ok[sel] = pairs_within(rings[ga], local[i[sel]], rings[gb], local[j[sel]], tau)
+    return np.bincount(pair[~ok], minlength=len(pairs)) == 0

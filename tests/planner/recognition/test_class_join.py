@@ -86,7 +86,7 @@ def test_no_class_holds_two_outlines_farther_apart_than_tau(seed, spread, curved
 
 
 def _joined_one_pair_at_a_time(rings, label, order, family, tau, max_points):
-    """The join walk as the module's docstring states it, every pair of leaders
+    """The join as the module's docstring states it, every pair of leaders
     compared directly (no tree), every member pair measured to the end."""
     sizes = [len(r) for r in rings]
     group = np.repeat(np.arange(len(rings)), sizes)
@@ -98,22 +98,30 @@ def _joined_one_pair_at_a_time(rings, label, order, family, tau, max_points):
     members = [np.flatnonzero(label == c)[np.argsort(place[label == c])] for c in range(count)]
     leaders = np.array([m[0] for m in members])
     gap = np.abs(support[leaders][:, None] - support[leaders][None]).max(axis=2)
-    into, wide, left = np.arange(count), np.zeros(count, dtype=bool), max_points
+    # every pair of leaders within tau in support, in order, measured while the
+    # work lasts (one too dear passed over)
+    measured, left = {}, max_points
     for a, b in zip(*np.nonzero(np.triu(gap <= tau * (1 + 1e-9), 1)), strict=True):
         mine, theirs = members[a], members[b]
-        if into[a] != a or into[b] != b or set(family[mine]) & set(family[theirs]):
+        if set(family[mine]) & set(family[theirs]):
             continue
         cost = len(mine) * int(points[theirs].sum()) + len(theirs) * int(points[mine].sum())
         if cost > left:
             continue
         left -= cost
-        close = [
+        measured[a, b] = all(
             pair_distances(rings[group[m]], local[[m]], rings[group[t]], local[[t]])[0] <= tau
             for m in mine
             for t in theirs
-        ]
-        if all(close):
-            members[a] = np.concatenate([mine, theirs])
+        )
+    # then the walk: b joins a when every class a holds lies within tau of b
+    into, wide = np.arange(count), np.zeros(count, dtype=bool)
+    held = {a: [a] for a in range(count)}
+    for a, b in sorted(measured):
+        if into[a] != a or into[b] != b:
+            continue
+        if all(measured.get((c, b), False) for c in held[a]):
+            held[a].append(b)
             into[b], wide[a] = a, True
     return into, wide
 
