@@ -394,6 +394,17 @@ class StablePose:
         return np.concatenate([p.outline for p in self.layers])
 
     @cached_property
+    def face_ends(self) -> np.ndarray:
+        """(F,) for each face of `all_faces`, the face that starts where it ends (the
+        next face of its ring): a face's end vertex is ``all_faces.start[face_ends]``."""
+        ring = self.all_faces.ring
+        out = np.arange(len(ring))
+        for r in np.unique(ring):
+            at = np.flatnonzero(ring == r)
+            out[at] = np.roll(at, -1)
+        return out
+
+    @cached_property
     def centroid(self) -> np.ndarray:
         """Area centroid of the outline with holes (model frame)."""
         return geometry.polygon_centroid(self.outline, self.holes)

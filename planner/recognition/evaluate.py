@@ -209,26 +209,27 @@ def evaluate_groups(
     bound = _joined_bounds(
         [
             sample_bounds(
-                pose.part(rs),
-                fit_bound.part(rs),
-                samples.part(rs, ss),
-                stables[j],
-                P,
-                U,
-                stack.local_faces[j],
-                stack.assigned_parts[j],
-                eps_d,
-                phi,
-                config,
-                slack,
+                pose.part(rs), fit_bound.part(rs), samples.part(rs, ss), stables[j], P, U,
+                stack.local_faces[j], stack.assigned_parts[j], eps_d, phi, config, slack,
             )
             for j, (rs, ss) in enumerate(parts)
         ]
-    )
+    )  # fmt: skip
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
     f_src, a_src = face[src], assigned[src]
     ok = bound.feasible & model_check(
-        stack.faces, f_src, a_src, P, psi, theta, t, eps_t, bound.d_theta, eps_d, phi, slack
+        stack.faces,
+        f_src,
+        a_src,
+        P,
+        psi,
+        theta,
+        t,
+        bound.face_move,
+        bound.d_theta,
+        eps_d,
+        phi,
+        slack,
     )
     fitness = np.ones(len(src))
     for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):

@@ -1,8 +1,9 @@
 """Model check and free-space check of posed samples (DESIGN §4.5).
 
 With the fitted pose: each contact lies on its assigned FINITE face within
-``eps_d + eps_t/2`` and its measured normal within ``phi + |dtheta|`` of the
-face's posed normal (:func:`model_check`); the path up to each contact (less
+``eps_d`` plus how far that face may have moved (at most ``eps_t/2``, less near
+the pose's reference point) and its measured normal within ``phi + |dtheta|`` of
+the face's posed normal (:func:`model_check`); the path up to each contact (less
 ``eps_d``), and every missed path whole, stays outside the posed outline shrunk
 by ``eps_t/2`` (:func:`free_space_check`); optionally the posed outline lies
 inside the safe circle (:func:`inside_workspace`).
@@ -50,28 +51,94 @@ def model_check(
     psi: np.ndarray,
     theta: np.ndarray,
     t: np.ndarray,
-    eps_t: np.ndarray,
+    face_move: np.ndarray,
     d_theta: np.ndarray,
     eps_d: float,
     phi: float,
     slack: float,
 ) -> np.ndarray:
     """(N,) does every assigned contact fit its posed face? Each contact (`points`
-    (s, 2), measured normal angles `psi` (s,)) within ``eps_d + eps_t/2 + slack`` of
-    its FINITE face (the segment, not its line) and its normal within
-    ``phi + d_theta`` of the face's posed normal.
+    (s, 2), measured normal angles `psi` (s,)) within ``eps_d + slack`` plus how
+    far its posed FINITE face may have moved of that face (the segment, not its
+    line), and its normal within ``phi + d_theta`` of the face's posed normal.
 
     `face`, `assigned` (N, s): each sample's face per contact and which contacts it
     assigns (spurious ones are not checked); `theta` (N,), `t` (N, 2) the poses;
-    `eps_t`, `d_theta` (N,) their error bounds.
+    `face_move` (N, s, B, 2) how far the start and the end of each contact's posed
+    face may lie from the true ones by each of B bounds (inf: not known): a point
+    between them moves by at most the interpolated value of each (the bounds are
+    convex along a face), so the contact must lie within ``eps_d + slack`` plus
+    the smallest of those values of some point of the face. `d_theta` (N,) the
+    rotation bounds.
     """
     # each contact on its finite posed face, normal within phi + dtheta
-    tol = eps_d + eps_t / 2 + slack
-    ok = contacts_on_faces(points, faces, face, assigned, theta[:, None], t[:, None], tol[:, None])
-    ok = ok[:, 0]
+    ok = np.ones(len(theta), dtype=bool)
+    _on_moved_faces(
+        c_array(points, dtype=float),
+        c_array(faces.start, dtype=float),
+        c_array(faces.end, dtype=float),
+        c_array(face, dtype=np.int64),
+        c_array(assigned, dtype=bool),
+        c_array(np.cos(theta), dtype=float),
+        c_array(np.sin(theta), dtype=float),
+        c_array(t, dtype=float),
+        c_array(face_move, dtype=float),
+        float(eps_d + slack),
+        ok,
+    )
     ang = np.abs(wrap_angle(psi[None, :] - theta[:, None] - faces.angle[face]))
     ok &= np.all(~assigned | (ang <= phi + d_theta[:, None] + ANGLE_SLACK), axis=1)
     return ok
+
+
+@numba.njit(cache=True, nogil=True)
+def _on_moved_faces(points, starts, ends, face, assigned, cos, sin, t, move, reach, out):  # type: ignore[no-untyped-def]
+    """:func:`model_check`'s contacts on their faces, one pose at a time: is some
+    point ``a + s e`` (0 <= s <= L) of the posed face within ``reach + m(s)`` of the
+    contact, for each bound's ``m`` linear from the start's move to the end's? For
+    one bound the points that are form an interval of s (``|p - a - s e| - m(s)``
+    is convex in s; squared, a quadratic inequality); the bounds' intervals and
+    the face must meet."""
+    for n in range(cos.shape[0]):
+        c, sn = cos[n], sin[n]
+        tx, ty = t[n, 0], t[n, 1]
+        for j in range(face.shape[1]):
+            if not assigned[n, j]:
+                continue
+            f = face[n, j]
+            ax = c * starts[f, 0] - sn * starts[f, 1] + tx
+            ay = sn * starts[f, 0] + c * starts[f, 1] + ty
+            bx = c * ends[f, 0] - sn * ends[f, 1] + tx
+            by = sn * ends[f, 0] + c * ends[f, 1] + ty
+            length = math.hypot(bx - ax, by - ay)
+            px, py = points[j, 0] - ax, points[j, 1] - ay
+            x, y = px, py
+            if length > 0.0:
+                ex, ey = (bx - ax) / length, (by - ay) / length
+                x, y = px * ex + py * ey, px * ey - py * ex
+            lo, hi = 0.0, length
+            for i in range(move.shape[2]):
+                m0, m1 = move[n, j, i, 0], move[n, j, i, 1]
+                if not (math.isfinite(m0) and math.isfinite(m1)):
+                    continue  # this bound is not known
+                k = (m1 - m0) / length if length > 0.0 else 0.0
+                r0 = reach + m0
+                if abs(k) >= 0.5:  # a steep taper (a tiny face): its larger end bounds it
+                    k, r0 = 0.0, reach + max(m0, m1)
+                # (x - s)^2 + y^2 <= (r0 + k s)^2, with r0 + k s > 0 along the face
+                qa = 1.0 - k * k
+                qb = -2.0 * (x + k * r0)
+                qc = x * x + y * y - r0 * r0
+                disc = qb * qb - 4.0 * qa * qc
+                if disc < 0.0:
+                    lo, hi = 1.0, 0.0
+                    break
+                root = math.sqrt(disc)
+                lo = max(lo, (-qb - root) / (2.0 * qa))
+                hi = min(hi, (-qb + root) / (2.0 * qa))
+            if lo > hi + 1e-9 * (1.0 + length):
+                out[n] = False
+                break
 
 
 def contacts_on_faces(

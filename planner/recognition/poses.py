@@ -214,6 +214,43 @@ def fit_bounds(
     return FitBounds(eps_t=eps_t0, d_theta=d_th, margin=margin, second=second)
 
 
+def _face_moves(
+    stable: StablePose,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    linear: np.ndarray,
+    consistent: np.ndarray,
+) -> np.ndarray:
+    """(N, s, 2, 2) how far the start and the end of each contact's face may move,
+    by each of the two bounds (`linear`, `consistent` (N, 1 + F): the origin, then
+    every face's start; inf where a bound is not known): ``[n, j, bound, end]``.
+    Each bound is convex along a face, so values interpolated between its ends
+    bound its points (the smaller of the two taken end by end would not); 0 where
+    the contact is not assigned."""
+    on = np.where(assigned, face, 0)
+    ends = np.stack([on, stable.face_ends[on]], axis=-1)  # (N, s, 2) vertex numbers
+    rows = np.arange(len(face))[:, None, None]
+    both = np.stack([linear[rows, 1 + ends], consistent[rows, 1 + ends]], axis=2)
+    return np.where(assigned[..., None, None], both, 0.0)
+
+
+def _outline_move(stable: StablePose, linear: np.ndarray, consistent: np.ndarray) -> np.ndarray:
+    """(N,) how far any point of the outline may move: the smaller of the two bounds
+    at every face's ends, and where the bounds cross along a face (each convex
+    along it, both interpolated), the value at the crossing."""
+    lin, con = linear[:, 1:], consistent[:, 1:]
+    farthest = np.minimum(lin, con).max(axis=1)
+    ends = stable.face_ends
+    gap = lin - con  # -inf where the consistent bound is not known
+    cross = np.isfinite(gap) & np.isfinite(gap[:, ends]) & (gap * gap[:, ends] < 0)
+    if cross.any():
+        n, f = np.nonzero(cross)
+        u = gap[n, f] / (gap[n, f] - gap[n, ends[f]])
+        value = lin[n, f] + u * (lin[n, ends[f]] - lin[n, f])
+        np.maximum.at(farthest, n, value)
+    return farthest
+
+
 @dataclass(frozen=True, eq=False)
 class SlideSamples:
     """Posed samples of K rows (N samples): `src` (N,) the row of each sample, `s`
@@ -311,13 +348,17 @@ def determined_rows(fit: FitBatch, src: np.ndarray) -> tuple[np.ndarray, np.ndar
 class SampleBounds:
     """Error bounds of each sample (N,): `d_translation` the |dt| bound of the pose
     translation, `d_theta` (radians), `eps_t` the error-disk diameter swept along
-    the posed outline (its cell included), and `feasible`, False where no pose at
-    all keeps every contact within its bounds."""
+    the posed outline (its cell included), `feasible`, False where no pose at
+    all keeps every contact within its bounds, and `face_move` (N, s, 2, 2) how
+    far the start and the end of each contact's posed face may lie from the true
+    ones by each of two bounds (:func:`_face_moves`; its cell included; 0 where
+    the contact is not assigned)."""
 
     d_translation: np.ndarray
     d_theta: np.ndarray
     eps_t: np.ndarray
     feasible: np.ndarray
+    face_move: np.ndarray
 
     def part(self, samples: slice) -> SampleBounds:
         """The bounds of some samples."""
@@ -347,12 +388,15 @@ def sample_bounds(
     src, s_val, cell = samples.src, samples.s, samples.cell
     e, rho = pose.slide_axis, pose.rho
     eps_t0, d_th, second = bounds.eps_t, bounds.d_theta, bounds.second
-    origin_and_outline = np.vstack([[0.0, 0.0], stable.extent])
+    # the model origin and every face's start (the outline's vertices among them)
+    origin_and_outline = np.vstack([[0.0, 0.0], faces.start])
     feasible = np.ones(len(src), dtype=bool)
     if config.bound_mode != "thesis":
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
         moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
         moved = moved * (1 + phi) + second[src][:, None]
+        linear = moved.copy()
+        consistent = np.full_like(moved, np.inf)
         d_theta = d_th[src]
         # determined poses: the set of poses consistent with every contact is often far
         # smaller than the estimator's worst case (errors do not add up); keep the smaller
@@ -370,16 +414,25 @@ def sample_bounds(
                 eps_d,
                 phi,
             )
-            moved[at] = np.minimum(moved[at], found.moved[pos] + slack)
+            consistent[at] = found.moved[pos] + slack
+            moved[at] = np.minimum(moved[at], consistent[at])
             d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
             # no pose keeps every contact within its bounds: the interpretation is out
             feasible[at] &= found.feasible[pos]
-        eps_t = 2 * moved[:, 1:].max(axis=1) + cell[src]
+        eps_t = 2 * _outline_move(stable, linear, consistent) + cell[src]
         d_translation = moved[:, 0] + cell[src] / 2
+        face_move = _face_moves(stable, face[src], assigned[src], linear, consistent)
+        face_move += cell[src][:, None, None, None] / 2
     else:
         eps_t = eps_t0[src] + cell[src]
         d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
         d_theta = d_th[src]
+        face_move = np.broadcast_to(eps_t[:, None, None, None] / 2, (*assigned[src].shape, 2, 2))
+        face_move = face_move.copy()
     return SampleBounds(
-        d_translation=d_translation, d_theta=d_theta, eps_t=eps_t, feasible=feasible
+        d_translation=d_translation,
+        d_theta=d_theta,
+        eps_t=eps_t,
+        feasible=feasible,
+        face_move=face_move,
     )

@@ -117,3 +117,16 @@ def test_bad_files_name_the_problem(tmp_path):
         parse_objects(
             {"objects": [{"name": "a", "outline": SQUARE}, {"name": "a", "outline": SQUARE}]}
         )
+
+
+@pytest.mark.parametrize("name", SET_NAMES)
+def test_each_face_ends_where_the_face_it_names_starts(name):
+    # holes, and the slices of posed solids, included
+    holed = object_from_dict(
+        {"name": "h", "outline": SQUARE, "holes": [[[4, 4], [4, 6], [6, 6], [6, 4]]]}
+    )
+    for obj in [*load_objects(DATA / f"{name}.json"), holed]:
+        for stable in obj.stable_poses:
+            faces = stable.all_faces
+            assert np.array_equal(faces.end, faces.start[stable.face_ends])
+            assert np.array_equal(faces.ring, faces.ring[stable.face_ends])

@@ -89,7 +89,7 @@ def test_forecast_of_nothing():
 
 def _ellipse_touched(steps: int = 4) -> Session:
     """A world of the shared curved set (the ellipse, from a simulated trial at the
-    5 degree sensor) after a miss and up to three contacts (`steps` in all): 16
+    5 degree sensor) after a miss and up to three contacts (`steps` in all): 15
     classes after two contacts, 7 after three, where no path is informative for
     the outcome model (every hit on the drawn curve has faces of other normals
     within its error disks' reach)."""
@@ -171,13 +171,13 @@ def test_where_the_recognition_ranks_alone_its_forecast_weighs_every_class(monke
 
 def test_a_weak_best_path_gives_way_to_the_recognitions_ranking(monkeypatch):
     """When the outcome model's best path would change the hypotheses only rarely
-    (under the weak share, raised here so that the ellipse after two contacts,
-    where the best changes them with probability 0.28, counts as weak), the plan
+    (under the weak share, raised here so that the ellipse after one contact,
+    where the best changes them with probability 0.33, counts as weak), the plan
     ranks the candidates on the recognition's predictions instead and says so
     (``pdm``: it ranks on the outcome model otherwise)."""
     from planner.planning import plan as plan_module
 
-    session = _ellipse_touched(3)
+    session = _ellipse_touched(2)
     now = len({h.equivalence_class for h in session.hypotheses})
     config = StrategyConfig(name="pdm", budget_ms=None)
     assert plan_session(session, (174.08, -98.46), config, 0).paths[0].scored_by == (

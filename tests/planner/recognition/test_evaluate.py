@@ -159,6 +159,16 @@ def test_bounds_cover_the_true_pose_for_errors_on_the_bounds_edges(name, seed):
     truth = world.pose.apply(world.stable.outline)
     moved = np.hypot(*(_posed(world.stable, samples.theta, samples.t)[0] - truth).T)
     assert moved.max() <= sb.eps_t[0] / 2 + 1e-9
+    # every point of each contact's face within the move interpolated between its ends
+    f, u = world.stable.all_faces, np.linspace(0.0, 1.0, 101)[:, None]
+    fitted = Pose(samples.t[0, 0], samples.t[0, 1], samples.theta[0])
+    for j, a in enumerate(faces):
+        along = f.start[a] + u * (f.end[a] - f.start[a])
+        gap = np.hypot(*(fitted.apply(along) - world.pose.apply(along)).T)
+        start, end = sb.face_move[0, j, :, 0], sb.face_move[0, j, :, 1]  # per bound
+        chords = np.where(np.isfinite(start), start + u * (end - start), np.inf)
+        assert np.all(gap <= chords.min(axis=1) + 1e-9)
+        assert np.all(chords.min(axis=1) <= sb.eps_t[0] / 2 + 1e-9)
 
 
 def test_thesis_bounds_are_the_fixed_error_disk():
@@ -228,8 +238,9 @@ def test_a_family_gets_no_sample_when_no_slide_keeps_its_contacts_on_their_faces
 
 
 # -- model check (§4.5) ----------------------------------------------------------------
-def _square_check(point, normal_angle, eps_t=1.0, d_theta=0.01, assigned=True):
-    """Model check of one contact on the square's face x = 10 at the identity pose."""
+def _square_check(point, normal_angle, face_move=0.5, d_theta=0.01, assigned=True):
+    """Model check of one contact on the square's face x = 10 at the identity pose,
+    the face known to within `face_move`."""
     f = SQUARE.stable_poses[0].faces
     right = int(np.argmax(f.normal[:, 0]))
     return model_check(
@@ -240,7 +251,7 @@ def _square_check(point, normal_angle, eps_t=1.0, d_theta=0.01, assigned=True):
         np.array([normal_angle]),
         np.zeros(1),
         np.zeros((1, 2)),
-        np.array([eps_t]),
+        np.full((1, 1, 1, 2), face_move),
         np.array([d_theta]),
         1.0,
         0.05,
@@ -253,7 +264,7 @@ def _square_check(point, normal_angle, eps_t=1.0, d_theta=0.01, assigned=True):
     [(0.0, True), (10.0, True), (11.4, True), (11.6, False), (-11.6, False), (30.0, False)],
 )
 def test_model_check_rejects_a_contact_beyond_its_face_end(y, kept):
-    # face y in [-10, 10]; allowance eps_d + eps_t/2 = 1.5 past either end
+    # face y in [-10, 10]; allowance eps_d + face_move = 1.5 past either end
     assert _square_check((10.0, y), 0.0) == kept
 
 
@@ -267,6 +278,50 @@ def test_model_check_rejects_a_normal_outside_its_cone(off, kept):
 def test_model_check_ignores_spurious_contacts():
     assert _square_check((40.0, 40.0), 1.0, assigned=False)
     assert not _square_check((40.0, 40.0), 1.0)
+
+
+def test_a_face_that_moves_less_at_one_end_admits_less_there():
+    # the right face runs from (10, -10) to (10, 10); its start may move 0.1, its end 2.0:
+    # within eps_d = 1 plus the move interpolated along it
+    def check(point):
+        f = SQUARE.stable_poses[0].faces
+        right = int(np.argmax(f.normal[:, 0]))
+        assert np.allclose(f.start[right], [10, -10]) and np.allclose(f.end[right], [10, 10])
+        return model_check(
+            f, np.array([[right]]), np.array([[True]]), np.array([point], float), np.zeros(1),
+            np.zeros(1), np.zeros((1, 2)), np.array([[[[0.1, 2.0]]]]), np.zeros(1), 1.0, 0.05, 0.0,
+        )[0]  # fmt: skip
+
+    assert check((10.0, -11.05)) and not check((10.0, -11.15))  # past the start: 1 + 0.1
+    assert check((10.0, 12.95)) and not check((10.0, 13.05))  # past the end: 1 + 2.0
+    assert check((12.0, 0.0)) and not check((12.1, 0.0))  # midway: 1 + 1.05 off the line
+
+
+@settings(max_examples=300, deadline=None, derandomize=True)
+@given(
+    st.floats(-30, 30), st.floats(-30, 30), st.lists(st.floats(0, 5), min_size=4, max_size=4),
+    st.floats(0, 2), st.floats(-math.pi, math.pi), st.booleans(),
+)  # fmt: skip
+def test_the_tapered_face_check_is_the_least_gap_along_the_face(x, y, m, reach, theta, one):
+    """The model check admits a contact exactly when some point of its posed face
+    lies within reach plus the smaller of two bounds' moves interpolated there (one
+    bound unknown: inf), sampled densely along the face."""
+    f = SQUARE.stable_poses[0].faces
+    move = np.array([[m[0], m[1]], [np.inf, np.inf] if one else [m[2], m[3]]])
+    ok = model_check(
+        f, np.zeros((1, 1), np.int64), np.ones((1, 1), bool), np.array([[x, y]]),
+        np.array([theta + f.angle[0]]), np.array([theta]), np.zeros((1, 2)),
+        move[None, None], np.zeros(1), reach, 0.0, 0.0,
+    )[0]  # fmt: skip
+    R = rotation_matrices(np.array([theta]))[0]
+    a, b = R @ f.start[0], R @ f.end[0]
+    u = np.linspace(0.0, 1.0, 20_001)
+    dist = np.hypot(*(np.array([x, y])[:, None] - (a[:, None] + u * (b - a)[:, None])))
+    start, end = move[:, :1], move[:, 1:]
+    chords = np.where(np.isfinite(start), start + u * (end - start), np.inf)
+    least = (dist - chords.min(axis=0)).min()
+    if abs(least - reach) > 1e-3:  # away from the boundary the two agree
+        assert ok == (least <= reach)
 
 
 def test_model_check_rejects_a_contact_off_the_face_line():
@@ -563,3 +618,17 @@ def test_shrunk_outlines_are_made_once_per_part_and_tolerance_for_the_process(mo
     with ThreadPoolExecutor(4) as pool:
         answers = list(pool.map(lambda _: a.crossed(many, 3.0), range(16)))
     assert all(np.array_equal(x, alone) for x in answers)
+
+
+def test_the_outline_bound_covers_where_two_bounds_cross_along_a_face():
+    # the square's corners alternately move 10 / 2 by one bound and 2 / 10 by the other:
+    # at every corner the smaller is 2, but midway along each face both allow 6
+    from planner.recognition.poses import _outline_move
+
+    stable = SQUARE.stable_poses[0]
+    linear = np.array([[0.0, 10.0, 2.0, 10.0, 2.0]])
+    consistent = np.array([[0.0, 2.0, 10.0, 2.0, 10.0]])
+    assert _outline_move(stable, linear, consistent)[0] == pytest.approx(6.0)
+    # no crossing, or one bound unknown: the larger of the smaller end values
+    assert _outline_move(stable, linear, linear + 1)[0] == pytest.approx(10.0)
+    assert _outline_move(stable, linear, np.full_like(linear, np.inf))[0] == pytest.approx(10.0)
