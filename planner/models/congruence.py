@@ -4,11 +4,12 @@ poses whose slices are congruent under a planar rotation are merged on import.""
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
 
-__all__ = ["congruent"]
+__all__ = ["congruent", "congruent_poses", "shape_labels"]
 
 #: Relative tolerance (of the slice's size) under which a vertex counts as lying
 #: on the line through its neighbours, and under which two slices coincide.
@@ -70,3 +71,86 @@ def congruent(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
         if face is not None and np.allclose(a.normal_z, b.normal_z[face], atol=tol, rtol=0):
             return True
     return False
+
+
+def congruent_poses(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
+    """Whether two stable poses (:class:`~planner.types.StablePose`) are one shape:
+    one rotation about their centroids (no mirroring) maps every layer's vertices
+    and face midpoints onto the same layer of the other within `tol` times the
+    size, with equal `normal_z` and probing heights. Vertices are compared as
+    given: an outline drawn with an extra vertex along a face is another shape.
+
+    >>> from planner.models.library import object_from_dict
+    >>> a = object_from_dict({"name": "a", "outline": [[0, 0], [4, 0], [4, 2], [0, 2]]})
+    >>> b = object_from_dict({"name": "b", "outline": [[9, 9], [9, 13], [7, 13], [7, 9]]})
+    >>> c = object_from_dict({"name": "c", "outline": [[0, 0], [4, 0], [4, 2.5], [0, 2.5]]})
+    >>> congruent_poses(a.stable_poses[0], b.stable_poses[0])
+    True
+    >>> congruent_poses(a.stable_poses[0], c.stable_poses[0])
+    False
+    """
+    if a.heights != b.heights or len(a.layers) != len(b.layers):
+        return False
+    for p, q in zip(a.layers, b.layers, strict=True):
+        if len(p.outline) != len(q.outline) or sorted(map(len, p.holes)) != sorted(
+            map(len, q.holes)
+        ):
+            return False
+        if (p.normal_z is None) != (q.normal_z is None):
+            return False
+    ca, cb = np.asarray(a.centroid, dtype=float), np.asarray(b.centroid, dtype=float)
+    size = max(float(np.max(np.hypot(*(a.extent - ca).T))), 1e-300)
+    limit = tol * size
+    for theta in _rotation_to(a.outline - ca, b.outline - cb, limit):
+        c, s = math.cos(theta), math.sin(theta)
+        rotation = np.array([[c, -s], [s, c]])
+        if all(
+            _layer_onto(p, q, ca, cb, rotation, limit, tol)
+            for p, q in zip(a.layers, b.layers, strict=True)
+        ):
+            return True
+    return False
+
+
+def _layer_onto(
+    p: Any, q: Any, ca: np.ndarray, cb: np.ndarray, rotation: np.ndarray, limit: float, tol: float
+) -> bool:
+    """Does `rotation` about the centroids map layer p's vertices and face midpoints
+    onto q's (and its faces' normal_z onto theirs)?"""
+    rings_p = [r - ca for r in (p.outline, *p.holes)]
+    rings_q = [r - cb for r in (q.outline, *q.holes)]
+    if _matches(np.concatenate(rings_p) @ rotation.T, np.concatenate(rings_q), limit) is None:
+        return False
+    middle_p = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in rings_p])
+    middle_q = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in rings_q])
+    face = _matches(middle_p @ rotation.T, middle_q, limit)
+    if face is None:
+        return False
+    if p.normal_z is None:
+        return True
+    return bool(np.allclose(p.normal_z, np.asarray(q.normal_z)[face], atol=tol, rtol=0))
+
+
+def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np.ndarray:
+    """(G,) one label per stable pose, equal exactly for those that are one shape
+    (:func:`congruent_poses`, joined transitively; only poses drawn with as many
+    vertices are compared)."""
+    label = np.arange(len(stables))
+
+    def root(i: int) -> int:
+        while label[i] != i:
+            i = int(label[i])
+        return i
+
+    def signature(p: Any) -> tuple:
+        return tuple((len(q.outline), tuple(sorted(map(len, q.holes)))) for q in p.layers)
+
+    by_signature: dict[tuple, list[int]] = {}
+    for i, p in enumerate(stables):
+        by_signature.setdefault(signature(p), []).append(i)
+    for members in by_signature.values():
+        for k, i in enumerate(members):
+            for j in members[k + 1 :]:
+                if root(i) != root(j) and congruent_poses(stables[i], stables[j], tol):
+                    label[root(j)] = root(i)
+    return np.array([root(i) for i in range(len(stables))])

@@ -53,6 +53,8 @@ def join_classes(
     family: np.ndarray,
     tau: float,
     max_points: int = JOIN_POINTS,
+    *,
+    shapes: np.ndarray | None = None,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Class labels (N,) after joining, renumbered as their leaders come in
     `order`, and per class whether it was joined (its members then lie within
@@ -61,7 +63,9 @@ def join_classes(
     `label` (N,) are the leaders' classes over the hypotheses stacked over the
     stable poses of `rings`, numbered in leader order; `family` (N,) labels the
     slide families (never two samples of one in a class); `tau` is the symmetry
-    tolerance."""
+    tolerance; `shapes` (one per stable pose of `rings`) which are one shape: as
+    in :func:`~planner.recognition.equivalence.equivalence_classes`, only those
+    share a class."""
     label = np.asarray(label, dtype=np.int64).copy()
     n = len(label)
     count = int(label.max()) + 1 if n else 0
@@ -88,6 +92,9 @@ def join_classes(
     size = np.diff(starts)
     points_of = np.add.reduceat(points[by_class], starts[:-1])
     apart = _apart_families(family, by_class, starts, near)
+    if shapes is not None:
+        shape = np.asarray(shapes)[group[leaders]]
+        apart &= shape[near[:, 0]] == shape[near[:, 1]]
     cost = size[near[:, 0]] * points_of[near[:, 1]] + size[near[:, 1]] * points_of[near[:, 0]]
     measured = near[_within_budget(np.where(apart, cost, max_points + 1), max_points)]
     close = measured[_all_within(rings, group, local, by_class, starts, measured, tau)]

@@ -12,7 +12,10 @@ one not yet in a class leads a new class and takes in every hypothesis not yet
 in one whose outline lies within ``tau / 2`` of its own. Any two members are
 then within ``tau`` of each other (the triangle inequality), whatever the
 order. The samples of one slide family (DESIGN §4.6) stay apart: the slide
-they sample is not known yet.
+they sample is not known yet; and so do hypotheses of stable poses that are not
+one shape (congruent, :mod:`planner.models.congruence`): two objects whose
+outlines differ by less than ``tau`` are still two answers, and more touches may
+tell them apart.
 
 Outline distance: the larger of the two directed distances from the points of
 one posed outline's boundary (holes included) to the faces of the other, a
@@ -243,13 +246,20 @@ def _keys_within(keys: np.ndarray, pairs: np.ndarray, reach: float) -> np.ndarra
 
 
 def equivalence_classes(
-    rings: Sequence[PosedRings], order: np.ndarray, family: np.ndarray, tau: float
+    rings: Sequence[PosedRings],
+    order: np.ndarray,
+    family: np.ndarray,
+    tau: float,
+    shapes: np.ndarray | None = None,
 ) -> np.ndarray:
     """Class label (N,) of N hypotheses stacked over the stable poses of `rings`.
 
     `order` (N,) is the order in which hypotheses lead classes (most probable
     first); `family` (N,) labels the interpretation each came from (samples of
-    one slide family never share a class); `tau` is the symmetry tolerance.
+    one slide family never share a class); `tau` is the symmetry tolerance;
+    `shapes` (one per stable pose of `rings`, default all equal) which stable
+    poses are one shape (:func:`~planner.models.congruence.shape_labels`): only
+    those share a class, so that distinct objects do only when congruent.
     """
     sizes = [len(r) for r in rings]
     offsets = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
@@ -264,7 +274,8 @@ def equivalence_classes(
     keys = _screen_keys(rings, (int(group[first]), int(local[first])), tau)
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(keys).max()))
-    ctx = _Leading(rings, group, local, family, label, tau)
+    shape = np.zeros(n, dtype=np.int64) if shapes is None else np.asarray(shapes)[group]
+    ctx = _Leading(rings, group, local, family, shape, label, tau)
     # pairs first found in a few of the keys (a tree in all of them is slow), then
     # held to all: the same pairs as one tree over every key
     low = keys[:, FIRST_KEYS]
@@ -292,6 +303,7 @@ class _Leading:
     group: np.ndarray
     local: np.ndarray
     family: np.ndarray
+    shape: np.ndarray
     label: np.ndarray
     tau: float
 
@@ -300,7 +312,8 @@ class _Leading:
         every pair decided in one pass per two stable poses, then the leaders in
         `order` take in the unlabelled hypotheses they are close to."""
         group, local, label = self.group, self.local, self.label
-        found = found[self.family[found[:, 0]] != self.family[found[:, 1]]]
+        a, b = found[:, 0], found[:, 1]
+        found = found[(self.family[a] != self.family[b]) & (self.shape[a] == self.shape[b])]
         close = np.zeros(len(found), dtype=bool)
         key = group[found[:, 0]] * len(self.rings) + group[found[:, 1]]
         for k in np.unique(key):
@@ -327,7 +340,11 @@ class _Leading:
                 continue
             label[leader] = leader
             near = np.asarray(tree.query_ball_point(keys[leader], r=reach, p=np.inf), np.int64)
-            near = near[(label[near] < 0) & (self.family[near] != self.family[leader])]
+            near = near[
+                (label[near] < 0)
+                & (self.family[near] != self.family[leader])
+                & (self.shape[near] == self.shape[leader])
+            ]
             ring = self.rings[group[leader]]
             for h in np.unique(group[near]):
                 mine = near[group[near] == h]

@@ -31,6 +31,7 @@ import numpy as np
 from planner.errors import InvalidObservationError
 from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
+from planner.models.congruence import shape_labels
 from planner.models.heights import check_height, probing_heights
 from planner.models.round import round_within
 from planner.models.simplify import simplify_models, widened
@@ -130,6 +131,12 @@ class Session:
         self._parent = _parent
         self._groups: list[Group] = (
             _parent._groups if _parent is not None else make_groups(list(self.models))
+        )
+        #: which groups' stable poses are one shape (only those share a class)
+        self._shapes: np.ndarray = (
+            _parent._shapes
+            if _parent is not None
+            else shape_labels([g.stable for g in self._groups])
         )
         self.length_scale = max(g.stable.centroid_radius for g in self._groups)
         self.accuracy = accuracy or self._default_accuracy()
@@ -391,14 +398,14 @@ class Session:
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
         labels = _interpretation_labels(cands)
+        shapes = self._shapes[[c.group for c in cands]]
         spacing = SAMPLE_SPACING * tau  # of the points measured along each face
         # one class: the outlines coincide at every probing height
         per_height, wide = [], np.zeros(len(prob), dtype=bool)
         for z in probing_heights(self.models):
             rings = [PosedRings.of(self._stable(c, z), c.theta, c.t, spacing) for c in cands]
-            label, joined = join_classes(
-                rings, equivalence_classes(rings, order, labels, tau), order, labels, tau
-            )
+            label = equivalence_classes(rings, order, labels, tau, shapes)
+            label, joined = join_classes(rings, label, order, labels, tau, shapes=shapes)
             per_height.append(label)
             wide |= joined[label]
         if len(per_height) == 1:

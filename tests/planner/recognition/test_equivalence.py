@@ -86,6 +86,22 @@ def test_near_twins_never_share_a_class(seed):
     assert all(len(names) == 1 for names in objects.values())
 
 
+@pytest.mark.parametrize("seed", range(8))
+def test_objects_within_the_tolerance_but_not_congruent_never_share_a_class(seed):
+    # 60 x 35 and 60 x 40: centred, 2.5 apart, within tau = 4 of a 2 mm sensor
+    a = object_from_dict(
+        {"name": "a", "outline": [[-30, -17.5], [30, -17.5], [30, 17.5], [-30, 17.5]]}
+    )
+    b = object_from_dict({"name": "b", "outline": [[-30, -20], [30, -20], [30, 20], [-30, 20]]})
+    world, session = touched([a, b], seed, 5, SensorBounds(2.0, 0.1))
+    objects: dict[int, set[str]] = {}
+    for h in session.hypotheses:
+        objects.setdefault(h.equivalence_class, set()).add(h.object)
+    assert all(len(names) == 1 for names in objects.values())
+    if session.status == "localized":
+        assert session.hypotheses[0].object == world.model.name
+
+
 def test_congruent_objects_in_one_place_are_one_class():
     square = {"outline": [[-10, -10], [10, -10], [10, 10], [-10, 10]]}
     a = object_from_dict({"name": "a", **square})
