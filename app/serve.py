@@ -110,6 +110,28 @@ def _memory_cap(limit: int | None) -> None:
     resource.setrlimit(resource.RLIMIT_DATA, (limit, hard))
 
 
+def _prepare_database(settings: Any) -> None:
+    """Create or migrate the database once, before several workers start: each
+    opens it at startup, and two creating a new SQLite file at once had the
+    second find it locked, fail to start, and the supervisor stop the service."""
+    from app.migrations import SchemaTooNewError
+    from app.store import Store
+    from app.store_types import StoreUnavailableError
+
+    store = Store(
+        settings.database,
+        busy_timeout_ms=settings.busy_timeout_ms,
+        synchronous=settings.sqlite_synchronous,
+        pool_size=1,
+    )
+    try:
+        store.open()
+    except (StoreUnavailableError, SchemaTooNewError) as exc:
+        raise SystemExit(f"tactile serve: {exc}") from exc
+    finally:
+        store.close()
+
+
 def cmd_serve(args: argparse.Namespace) -> int:
     import structlog
     import uvicorn
@@ -143,6 +165,8 @@ def cmd_serve(args: argparse.Namespace) -> int:
         os.environ["TACTILE_ALLOWED_HOSTS"] = json.dumps(list(LOOPBACK_NAMES))
         settings = Settings()
     configure_logging(settings.log_level, settings.log_json)
+    if args.workers > 1:
+        _prepare_database(settings)
     _memory_cap(settings.max_memory_bytes)
     _metrics_dir(args.workers)
     sockets = bind_sockets(args.host, args.port, args.workers)

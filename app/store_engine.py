@@ -5,6 +5,8 @@ file's lock up front instead of failing to upgrade a read lock later)."""
 
 from __future__ import annotations
 
+import sqlite3
+import time
 from typing import Any
 
 from sqlalchemy import URL, Connection, Engine, create_engine, event
@@ -42,7 +44,9 @@ def make_engine(url: URL, busy_timeout_ms: int, synchronous: str, pool_size: int
         cursor.execute(f"PRAGMA busy_timeout = {int(busy_timeout_ms)}")
         cursor.execute(f"PRAGMA synchronous = {synchronous}")
         cursor.execute("PRAGMA foreign_keys = ON")
-        mode = cursor.execute("PRAGMA journal_mode = WAL").fetchone()[0]
+        mode = cursor.execute("PRAGMA journal_mode").fetchone()[0]
+        if str(mode).lower() != "wal":
+            mode = _to_wal(cursor, busy_timeout_ms)
         cursor.close()
         if str(mode).lower() != "wal":
             raise RuntimeError(f"SQLite refused WAL mode (got {mode!r})")
@@ -53,3 +57,19 @@ def make_engine(url: URL, busy_timeout_ms: int, synchronous: str, pool_size: int
         conn.exec_driver_sql("BEGIN IMMEDIATE" if write else "BEGIN")
 
     return engine
+
+
+def _to_wal(cursor: Any, busy_timeout_ms: int) -> str:
+    """Switch a database file to WAL mode; returns the mode it is in. The switch
+    needs the file to itself, and SQLite answers "database is locked" at once
+    (without waiting the busy timeout) while another connection holds it, as a
+    second worker of a new service does while the first creates the schema:
+    retried for the busy timeout (at least a second)."""
+    deadline = time.monotonic() + max(busy_timeout_ms / 1000, 1.0)
+    while True:
+        try:
+            return str(cursor.execute("PRAGMA journal_mode = WAL").fetchone()[0])
+        except sqlite3.OperationalError as exc:
+            if "locked" not in str(exc) or time.monotonic() > deadline:
+                raise
+            time.sleep(0.02)

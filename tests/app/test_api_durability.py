@@ -92,6 +92,23 @@ def test_serve_with_two_workers_shares_the_database(db_target):
         assert "http_requests_total" in metrics
 
 
+def test_serve_prepares_a_new_database_before_its_workers_start(tmp_path):
+    """Several workers each open the database at startup; on a new SQLite file two
+    creating it at once had the second find it locked and fail to start, and the
+    supervisor then stopped the whole service. `tactile serve` creates it first."""
+    import sqlite3
+
+    from app.serve import _prepare_database
+    from app.settings import Settings
+
+    db = tmp_path / "new.db"
+    _prepare_database(Settings(db_path=db))
+    with sqlite3.connect(db) as conn:
+        assert conn.execute("PRAGMA journal_mode").fetchone()[0] == "wal"
+        tables = {row[0] for row in conn.execute("SELECT name FROM sqlite_master")}
+    assert {"sessions", "observations"} <= tables
+
+
 def test_bound_socket_gives_accepted_connections_tcp_nodelay():
     """uvicorn #3149: the socket `tactile serve` binds carries TCP_NODELAY to its connections."""
     listener = bind_socket("127.0.0.1", 0)

@@ -311,3 +311,28 @@ def test_a_url_is_never_taken_for_a_file(target, backend):
 def test_unsupported_databases_are_refused(target):
     with pytest.raises(ValueError):
         database_url(target)
+
+
+def test_a_connection_waits_to_switch_a_busy_new_file_to_wal(tmp_path):
+    """A second worker of a new service connects while the first writes to the file,
+    still in SQLite's first (rollback) mode: the switch to WAL is answered "database
+    is locked" at once, and is retried until the writer is done."""
+    from sqlalchemy import URL
+
+    from app.store_engine import make_engine
+
+    path = tmp_path / "fresh.db"
+    holder = sqlite3.connect(path, isolation_level=None, check_same_thread=False)
+    holder.execute("CREATE TABLE t (x)")
+    holder.execute("BEGIN IMMEDIATE")
+    holder.execute("INSERT INTO t VALUES (1)")
+    release = threading.Timer(0.3, holder.execute, ("COMMIT",))
+    release.start()
+    engine = make_engine(URL.create("sqlite", database=str(path)), 5000, "FULL", 1)
+    try:
+        with engine.connect() as conn:
+            assert conn.exec_driver_sql("PRAGMA journal_mode").scalar() == "wal"
+    finally:
+        release.join()
+        engine.dispose()
+        holder.close()
