@@ -73,19 +73,8 @@ def model_check(
     """
     # each contact on its finite posed face, normal within phi + dtheta
     ok = np.ones(len(theta), dtype=bool)
-    _on_moved_faces(
-        c_array(points, dtype=float),
-        c_array(faces.start, dtype=float),
-        c_array(faces.end, dtype=float),
-        c_array(face, dtype=np.int64),
-        c_array(assigned, dtype=bool),
-        c_array(np.cos(theta), dtype=float),
-        c_array(np.sin(theta), dtype=float),
-        c_array(t, dtype=float),
-        c_array(face_move, dtype=float),
-        float(eps_d + slack),
-        ok,
-    )
+    posed = _compiled_inputs(points, faces, face, assigned, theta, t)
+    _on_moved_faces(*posed, c_array(face_move, dtype=float), float(eps_d + slack), ok)
     ang = np.abs(wrap_angle(psi[None, :] - theta[:, None] - faces.angle[face]))
     ok &= np.all(~assigned | (ang <= phi + d_theta[:, None] + ANGLE_SLACK), axis=1)
     return ok
@@ -157,7 +146,22 @@ def contacts_on_faces(
     :func:`planner.geometry.point_segment_distance`) on the faces posed as
     :func:`planner.geometry.rotate` poses them; `tol` may be one number for all."""
     out = np.ones(theta.shape, dtype=bool)
-    _on_faces(
+    posed = _compiled_inputs(points, faces, face, assigned, theta, t)
+    _on_faces(*posed, c_array(np.broadcast_to(tol, theta.shape), dtype=float), out)
+    return out
+
+
+def _compiled_inputs(
+    points: np.ndarray,
+    faces: Faces,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    theta: np.ndarray,
+    t: np.ndarray,
+) -> tuple[np.ndarray, ...]:
+    """The contacts, the faces, the rows' faces and the poses (cos, sin, t) as the
+    compiled face checks take them."""
+    return (
         c_array(points, dtype=float),
         c_array(faces.start, dtype=float),
         c_array(faces.end, dtype=float),
@@ -166,10 +170,7 @@ def contacts_on_faces(
         c_array(np.cos(theta), dtype=float),
         c_array(np.sin(theta), dtype=float),
         c_array(t, dtype=float),
-        c_array(np.broadcast_to(tol, theta.shape), dtype=float),
-        out,
     )
-    return out
 
 
 @numba.njit(cache=True, nogil=True)
