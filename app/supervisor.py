@@ -10,7 +10,10 @@ one worker, 0.4 on the other, and no more throughput than one worker.
 Here every worker listens on a socket of its own, all bound to the same address
 with ``SO_REUSEPORT``: the kernel spreads connections over them by their
 addresses. A worker that dies is replaced on its own socket (a socket left
-without a worker would hold its share of connections unanswered).
+without a worker would hold its share of connections unanswered). A worker that
+fails to start stops the service, as uvicorn's supervisor does (a broken app
+fails every start), unless other workers serve: then it is started again, up to
+`START_RETRIES` times within `START_WINDOW_S`.
 
 :func:`per_worker_supervisor` returns such a supervisor where the installed
 uvicorn's supervisor has the shape it builds on (``Multiprocess(config,
@@ -22,9 +25,15 @@ from __future__ import annotations
 
 import inspect
 import socket
+import time
 from typing import Any
 
-__all__ = ["per_worker_supervisor", "reuse_port_supported"]
+__all__ = ["START_RETRIES", "START_WINDOW_S", "per_worker_supervisor", "reuse_port_supported"]
+
+#: Failed starts of one worker within `START_WINDOW_S`, while others serve, that the
+#: service outlives (one more stops it).
+START_RETRIES = 3
+START_WINDOW_S = 300.0
 
 
 def reuse_port_supported() -> bool:
@@ -83,15 +92,30 @@ def per_worker_supervisor(config: Any, sockets: list[socket.socket]) -> Any | No
         def keep_subprocess_alive(self) -> None:
             if self.should_exit.is_set():
                 return
+            failed = getattr(self, "failed_starts", None)
+            if failed is None:
+                failed = self.failed_starts = [[] for _ in self.processes]
             for idx, worker in enumerate(self.processes):
                 if worker.is_alive(timeout=self.config.timeout_worker_healthcheck):
                     continue
                 worker.kill()  # hung or gone
                 worker.join()
                 if worker.exitcode == STARTUP_FAILURE:
-                    log.error("a worker failed to start; stopping")
-                    self.should_exit.set()
-                    return
+                    # a broken app fails every start: stop, unless other workers
+                    # serve (a start met a passing fault: the database briefly
+                    # away), and then after a few failures within a while
+                    now = time.monotonic()
+                    failed[idx] = [t for t in failed[idx] if now - t < START_WINDOW_S] + [now]
+                    serving = any(
+                        w.is_alive(timeout=self.config.timeout_worker_healthcheck)
+                        for j, w in enumerate(self.processes)
+                        if j != idx
+                    )
+                    if not serving or len(failed[idx]) > START_RETRIES:
+                        log.error("a worker failed to start; stopping")
+                        self.should_exit.set()
+                        return
+                    log.warning("a worker failed to start; started again (others serve)")
                 if self.should_exit.is_set():
                     return
                 log.info("worker %s died; replaced on its socket", worker.pid)

@@ -156,3 +156,75 @@ def test_each_worker_socket_takes_its_share_and_the_port_stays_one_services():
     finally:
         for listener in listeners:
             listener.close()
+
+
+class _FakeWorker:
+    """What the supervisor asks of a worker process."""
+
+    def __init__(self, alive: bool, exitcode: int | None = None) -> None:
+        self.alive, self.exitcode, self.pid = alive, exitcode, 0
+
+    def is_alive(self, timeout: float = 5) -> bool:
+        return self.alive
+
+    def kill(self) -> None:
+        pass
+
+    def join(self) -> None:
+        pass
+
+
+@pytest.fixture
+def supervisor():
+    """A two-worker supervisor of `tactile serve` (its signal handlers put back after)."""
+    import signal
+
+    import uvicorn
+    from uvicorn.supervisors.multiprocess import SIGNALS
+
+    from app.supervisor import per_worker_supervisor
+
+    saved = {sig: signal.getsignal(sig) for sig in SIGNALS}
+    sockets = [socket.socket(), socket.socket()]
+    try:
+        config = uvicorn.Config("app.main:create_app", factory=True, workers=2)
+        found = per_worker_supervisor(config, sockets)
+        if found is None:
+            pytest.skip("the installed uvicorn's supervisor has another shape")
+        yield found
+    finally:
+        for sig, handler in saved.items():
+            signal.signal(sig, handler)
+        for s in sockets:
+            s.close()
+
+
+def test_a_worker_failing_to_start_while_another_serves_is_started_again(supervisor):
+    from uvicorn.config import STARTUP_FAILURE
+
+    from app.supervisor import START_RETRIES
+
+    spawned = []
+
+    def spawn(idx):
+        spawned.append(idx)
+        return _FakeWorker(False, STARTUP_FAILURE)
+
+    supervisor._spawn = spawn
+    supervisor.processes = [_FakeWorker(True), _FakeWorker(False, STARTUP_FAILURE)]
+    for _ in range(START_RETRIES):
+        supervisor.keep_subprocess_alive()
+        assert not supervisor.should_exit.is_set()
+    supervisor.keep_subprocess_alive()  # one failure too many within the window: stop
+    assert supervisor.should_exit.is_set()
+    assert spawned == [1] * START_RETRIES
+
+
+def test_a_worker_failing_to_start_with_none_serving_stops_the_service(supervisor):
+    from uvicorn.config import STARTUP_FAILURE
+
+    supervisor._spawn = lambda idx: pytest.fail("a broken app must not be started again")
+    supervisor.processes = [_FakeWorker(False), _FakeWorker(False, STARTUP_FAILURE)]
+    supervisor.processes[0].exitcode = STARTUP_FAILURE
+    supervisor.keep_subprocess_alive()
+    assert supervisor.should_exit.is_set()
