@@ -133,8 +133,9 @@ def _layer_onto(
 
 def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np.ndarray:
     """(G,) one label per stable pose, equal exactly for those that are one shape
-    (:func:`congruent_poses`, joined transitively; only poses drawn with as many
-    vertices are compared)."""
+    (:func:`congruent_poses`, joined transitively). Only poses alike in what a
+    rigid motion keeps (vertices per ring, area and perimeter to six digits) are
+    compared: a set of distinct parts costs no pair at all."""
     label = np.arange(len(stables))
 
     def root(i: int) -> int:
@@ -143,7 +144,11 @@ def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np
         return i
 
     def signature(p: Any) -> tuple:
-        return tuple((len(q.outline), tuple(sorted(map(len, q.holes)))) for q in p.layers)
+        rings = [r for q in p.layers for r in (q.outline, *q.holes)]
+        area = sum(abs(_shoelace(r)) for r in rings)
+        length = sum(float(np.hypot(*(np.roll(r, -1, axis=0) - r).T).sum()) for r in rings)
+        counts = tuple((len(q.outline), tuple(sorted(map(len, q.holes)))) for q in p.layers)
+        return counts, float(f"{area:.6g}"), float(f"{length:.6g}")
 
     by_signature: dict[tuple, list[int]] = {}
     for i, p in enumerate(stables):
@@ -154,3 +159,9 @@ def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np
                 if root(i) != root(j) and congruent_poses(stables[i], stables[j], tol):
                     label[root(j)] = root(i)
     return np.array([root(i) for i in range(len(stables))])
+
+
+def _shoelace(ring: np.ndarray) -> float:
+    """Signed area of a closed ring."""
+    x, y = ring[:, 0], ring[:, 1]
+    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))

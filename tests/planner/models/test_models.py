@@ -130,3 +130,20 @@ def test_each_face_ends_where_the_face_it_names_starts(name):
             faces = stable.all_faces
             assert np.array_equal(faces.end, faces.start[stable.face_ends])
             assert np.array_equal(faces.ring, faces.ring[stable.face_ends])
+
+
+def test_shape_labels_join_congruent_poses_and_nothing_else():
+    from planner.models.congruence import shape_labels
+
+    ell = np.array([[0, 0], [30, 0], [30, 10], [10, 10], [10, 20], [0, 20]], float)
+    c, s = math.cos(1.1), math.sin(1.1)
+    turned = np.roll(ell @ np.array([[c, -s], [s, c]]).T + [50.0, -7.0], 2, axis=0)
+    mirrored = (ell * [-1.0, 1.0])[::-1]  # the same edges, mirrored: not congruent
+    wider = ell * [1.01, 1.0]
+    outlines = [ell, turned, mirrored, wider, ell + 3.0]
+    objects = [
+        object_from_dict({"name": f"o{k}", "outline": o.tolist()}) for k, o in enumerate(outlines)
+    ]
+    labels = shape_labels([o.stable_poses[0] for o in objects])
+    assert labels[0] == labels[1] == labels[4]
+    assert len({labels[0], labels[2], labels[3]}) == 3
