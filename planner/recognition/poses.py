@@ -422,7 +422,7 @@ def sample_bounds(
         eps_t = 2 * _outline_move(stable, linear, consistent) + cell[src]
         d_translation = moved[:, 0] + cell[src] / 2
         face_move = _face_moves(stable, face[src], assigned[src], linear, consistent)
-        face_move += cell[src][:, None, None, None] / 2
+        face_move += np.where(assigned[src], cell[src][:, None] / 2, 0.0)[..., None, None]
     else:
         eps_t = eps_t0[src] + cell[src]
         d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
