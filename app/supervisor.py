@@ -70,6 +70,11 @@ def per_worker_supervisor(config: Any, sockets: list[socket.socket]) -> Any | No
             worker.start()
             return worker
 
+        def __init__(self, *args: Any) -> None:
+            super().__init__(*args)
+            #: per worker, when its recent starts failed
+            self.failed_starts: list[list[float]] = [[] for _ in range(config.workers)]
+
         def init_processes(self) -> None:
             self.processes = [self._spawn(idx) for idx in range(self.processes_num)]
 
@@ -92,9 +97,7 @@ def per_worker_supervisor(config: Any, sockets: list[socket.socket]) -> Any | No
         def keep_subprocess_alive(self) -> None:
             if self.should_exit.is_set():
                 return
-            failed = getattr(self, "failed_starts", None)
-            if failed is None:
-                failed = self.failed_starts = [[] for _ in self.processes]
+            failed = self.failed_starts
             for idx, worker in enumerate(self.processes):
                 if worker.is_alive(timeout=self.config.timeout_worker_healthcheck):
                     continue

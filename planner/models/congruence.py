@@ -8,21 +8,30 @@ from collections.abc import Sequence
 from typing import Any
 
 import numpy as np
+from scipy.spatial import cKDTree
+
+from planner.geometry import signed_area
 
 __all__ = ["congruent", "congruent_poses", "shape_labels"]
 
 #: Relative tolerance (of the slice's size) under which a vertex counts as lying
 #: on the line through its neighbours, and under which two slices coincide.
 COLLINEAR_TOLERANCE = 1e-6
+#: The most rotations tried for two outlines. A shape many-fold symmetric maps
+#: onto its copy at the first; past this many, two outlines count as two shapes
+#: (never one that is not: the answer stays sound), so that a pair of heavy
+#: outlines costs a bounded amount.
+MAX_ROTATIONS = 32
 
 
 def _rotation_to(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
     """Angles (radians) of the best rotations about the origin taking the rows
     of a (N, 2) onto b (N, 2) cyclically shifted by k, one per plausible shift k
-    (those that send a's first vertex to a vertex of b at the same radius)."""
+    (those that send a's first vertex to a vertex of b at the same radius; the
+    first `MAX_ROTATIONS` of them)."""
     n = len(a)
     radius_a, radius_b = np.hypot(*a[0]), np.hypot(*b.T)
-    shifts = np.flatnonzero(np.abs(radius_b - radius_a) <= tol)
+    shifts = np.flatnonzero(np.abs(radius_b - radius_a) <= tol)[:MAX_ROTATIONS]
     shifted = b[(shifts[:, None] + np.arange(n)[None, :]) % n]
     # theta_k = atan2(sum_i a_i x b_(i+k), sum_i a_i . b_(i+k))
     cross = np.sum(a[None, :, 0] * shifted[..., 1] - a[None, :, 1] * shifted[..., 0], axis=1)
@@ -31,10 +40,11 @@ def _rotation_to(a: np.ndarray, b: np.ndarray, tol: float) -> np.ndarray:
 
 
 def _matches(points: np.ndarray, targets: np.ndarray, tol: float) -> np.ndarray | None:
-    """Index of the target within `tol` of each point, if that pairing is one-to-one."""
-    distance = np.hypot(*(points[:, None, :] - targets[None, :, :]).transpose(2, 0, 1))
-    nearest = np.argmin(distance, axis=1)
-    if np.any(distance[np.arange(len(points)), nearest] > tol):
+    """Index of the target within `tol` of each point, if that pairing is one-to-one
+    (a k-d tree over the targets: memory and time grow with the vertices, not with
+    their pairs)."""
+    distance, nearest = cKDTree(targets).query(points, distance_upper_bound=tol)
+    if not np.all(np.isfinite(distance)):
         return None
     if len(np.unique(nearest)) != len(targets):
         return None
@@ -59,18 +69,11 @@ def congruent(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
         return False
     size = max(float(np.max(np.hypot(*a.outline.T))), 1e-300)
     limit = tol * size
-    a_vertices, b_vertices = np.concatenate(a.rings), np.concatenate(b.rings)
-    a_middle = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in a.rings])
-    b_middle = np.concatenate([(r + np.roll(r, -1, axis=0)) / 2 for r in b.rings])
-    for theta in _rotation_to(a.outline, b.outline, limit):
-        c, s = math.cos(theta), math.sin(theta)
-        rotation = np.array([[c, -s], [s, c]])
-        if _matches(a_vertices @ rotation.T, b_vertices, limit) is None:
-            continue
-        face = _matches(a_middle @ rotation.T, b_middle, limit)
-        if face is not None and np.allclose(a.normal_z, b.normal_z[face], atol=tol, rtol=0):
-            return True
-    return False
+    origin = np.zeros(2)
+    return any(
+        _layer_onto(a, b, origin, origin, _turn(theta), limit, tol)
+        for theta in _rotation_to(a.outline, b.outline, limit)
+    )
 
 
 def congruent_poses(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
@@ -102,8 +105,7 @@ def congruent_poses(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
     size = max(float(np.max(np.hypot(*(a.extent - ca).T))), 1e-300)
     limit = tol * size
     for theta in _rotation_to(a.outline - ca, b.outline - cb, limit):
-        c, s = math.cos(theta), math.sin(theta)
-        rotation = np.array([[c, -s], [s, c]])
+        rotation = _turn(theta)
         if all(
             _layer_onto(p, q, ca, cb, rotation, limit, tol)
             for p, q in zip(a.layers, b.layers, strict=True)
@@ -112,11 +114,16 @@ def congruent_poses(a: Any, b: Any, tol: float = COLLINEAR_TOLERANCE) -> bool:
     return False
 
 
+def _turn(theta: float) -> np.ndarray:
+    c, s = math.cos(theta), math.sin(theta)
+    return np.array([[c, -s], [s, c]])
+
+
 def _layer_onto(
     p: Any, q: Any, ca: np.ndarray, cb: np.ndarray, rotation: np.ndarray, limit: float, tol: float
 ) -> bool:
-    """Does `rotation` about the centroids map layer p's vertices and face midpoints
-    onto q's (and its faces' normal_z onto theirs)?"""
+    """Does `rotation` about the centroids `ca`, `cb` map layer (or slice) p's
+    vertices and face midpoints onto q's (and its faces' normal_z onto theirs)?"""
     rings_p = [r - ca for r in (p.outline, *p.holes)]
     rings_q = [r - cb for r in (q.outline, *q.holes)]
     if _matches(np.concatenate(rings_p) @ rotation.T, np.concatenate(rings_q), limit) is None:
@@ -133,19 +140,14 @@ def _layer_onto(
 
 def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np.ndarray:
     """(G,) one label per stable pose, equal exactly for those that are one shape
-    (:func:`congruent_poses`, joined transitively). Only poses alike in what a
+    (:func:`congruent_poses`; each compared with one pose of every shape found
+    so far). Only poses alike in what a
     rigid motion keeps (vertices per ring, area and perimeter to six digits) are
     compared: a set of distinct parts costs no pair at all."""
-    label = np.arange(len(stables))
-
-    def root(i: int) -> int:
-        while label[i] != i:
-            i = int(label[i])
-        return i
 
     def signature(p: Any) -> tuple:
         rings = [r for q in p.layers for r in (q.outline, *q.holes)]
-        area = sum(abs(_shoelace(r)) for r in rings)
+        area = sum(abs(signed_area(r)) for r in rings)
         length = sum(float(np.hypot(*(np.roll(r, -1, axis=0) - r).T).sum()) for r in rings)
         counts = tuple((len(q.outline), tuple(sorted(map(len, q.holes)))) for q in p.layers)
         return counts, float(f"{area:.6g}"), float(f"{length:.6g}")
@@ -153,15 +155,13 @@ def shape_labels(stables: Sequence[Any], tol: float = COLLINEAR_TOLERANCE) -> np
     by_signature: dict[tuple, list[int]] = {}
     for i, p in enumerate(stables):
         by_signature.setdefault(signature(p), []).append(i)
+    label = np.arange(len(stables))
     for members in by_signature.values():
-        for k, i in enumerate(members):
-            for j in members[k + 1 :]:
-                if root(i) != root(j) and congruent_poses(stables[i], stables[j], tol):
-                    label[root(j)] = root(i)
-    return np.array([root(i) for i in range(len(stables))])
-
-
-def _shoelace(ring: np.ndarray) -> float:
-    """Signed area of a closed ring."""
-    x, y = ring[:, 0], ring[:, 1]
-    return 0.5 * float(np.dot(x, np.roll(y, -1)) - np.dot(y, np.roll(x, -1)))
+        heads: list[int] = []  # one pose of each shape found so far
+        for i in members:
+            head = next((h for h in heads if congruent_poses(stables[h], stables[i], tol)), None)
+            if head is None:
+                heads.append(i)
+            else:
+                label[i] = head
+    return label

@@ -95,10 +95,7 @@ def _on_moved_faces(points, starts, ends, face, assigned, cos, sin, t, move, rea
             if not assigned[n, j]:
                 continue
             f = face[n, j]
-            ax = c * starts[f, 0] - sn * starts[f, 1] + tx
-            ay = sn * starts[f, 0] + c * starts[f, 1] + ty
-            bx = c * ends[f, 0] - sn * ends[f, 1] + tx
-            by = sn * ends[f, 0] + c * ends[f, 1] + ty
+            ax, ay, bx, by = _posed_face(starts, ends, f, c, sn, tx, ty)
             length = math.hypot(bx - ax, by - ay)
             px, py = points[j, 0] - ax, points[j, 1] - ay
             x, y = px, py
@@ -185,14 +182,8 @@ def _on_faces(points, starts, ends, face, assigned, cos, sin, t, tol, out):  # t
                 if not assigned[k, j]:
                     continue
                 f = face[k, j]
-                gap_x, gap_y = segment_gap(
-                    points[j, 0],
-                    points[j, 1],
-                    c * starts[f, 0] + -s * starts[f, 1] + tx,
-                    s * starts[f, 0] + c * starts[f, 1] + ty,
-                    c * ends[f, 0] + -s * ends[f, 1] + tx,
-                    s * ends[f, 0] + c * ends[f, 1] + ty,
-                )
+                ax, ay, bx, by = _posed_face(starts, ends, f, c, s, tx, ty)
+                gap_x, gap_y = segment_gap(points[j, 0], points[j, 1], ax, ay, bx, by)
                 if math.hypot(gap_x, gap_y) > tol[k, m]:
                     out[k, m] = False
                     break
@@ -293,3 +284,15 @@ def _tol_step(tol: np.ndarray, floor: float) -> np.ndarray:
     (sound: a larger shrink is more lenient): each one's step n (>= 0)."""
     tol = np.maximum(tol, floor)
     return np.ceil(np.log(tol / floor) / math.log(_TOL_RATIO) - SHARE_SLACK).astype(np.int64)
+
+
+@numba.njit(cache=True, nogil=True)
+def _posed_face(starts, ends, f, c, s, tx, ty):  # type: ignore[no-untyped-def]
+    """Face f's start and end (ax, ay, bx, by) turned by (cos, sin) = (c, s) and
+    moved by (tx, ty), in the arithmetic of :func:`planner.geometry.rotate`."""
+    return (
+        c * starts[f, 0] + -s * starts[f, 1] + tx,
+        s * starts[f, 0] + c * starts[f, 1] + ty,
+        c * ends[f, 0] + -s * ends[f, 1] + tx,
+        s * ends[f, 0] + c * ends[f, 1] + ty,
+    )

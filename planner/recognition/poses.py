@@ -393,10 +393,9 @@ def sample_bounds(
     feasible = np.ones(len(src), dtype=bool)
     if config.bound_mode != "thesis":
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
-        moved = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
-        moved = moved * (1 + phi) + second[src][:, None]
-        linear = moved.copy()
-        consistent = np.full_like(moved, np.inf)
+        linear = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
+        linear = linear * (1 + phi) + second[src][:, None]
+        consistent = np.full_like(linear, np.inf)  # known for determined poses only
         d_theta = d_th[src]
         # determined poses: the set of poses consistent with every contact is often far
         # smaller than the estimator's worst case (errors do not add up); keep the smaller
@@ -415,20 +414,19 @@ def sample_bounds(
                 phi,
             )
             consistent[at] = found.moved[pos] + slack
-            moved[at] = np.minimum(moved[at], consistent[at])
             d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
             # no pose keeps every contact within its bounds: the interpretation is out
             feasible[at] &= found.feasible[pos]
         eps_t = 2 * _outline_move(stable, linear, consistent) + cell[src]
-        d_translation = moved[:, 0] + cell[src] / 2
+        d_translation = np.minimum(linear[:, 0], consistent[:, 0]) + cell[src] / 2
         face_move = _face_moves(stable, face[src], assigned[src], linear, consistent)
         face_move += np.where(assigned[src], cell[src][:, None] / 2, 0.0)[..., None, None]
     else:
         eps_t = eps_t0[src] + cell[src]
         d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
         d_theta = d_th[src]
-        face_move = np.broadcast_to(eps_t[:, None, None, None] / 2, (*assigned[src].shape, 2, 2))
-        face_move = face_move.copy()
+        face_move = np.where(assigned[src], eps_t[:, None] / 2, 0.0)[..., None, None]
+        face_move = np.repeat(np.repeat(face_move, 2, axis=2), 2, axis=3)
     return SampleBounds(
         d_translation=d_translation,
         d_theta=d_theta,
