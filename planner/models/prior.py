@@ -21,6 +21,9 @@ from planner.types import ObjectModel, StablePose, Workspace
 
 __all__ = ["draw_poses", "draw_stable_poses"]
 
+#: Most posed vertices held at once while testing drawn poses.
+_POSED_VERTICES = 1_000_000
+
 
 def draw_stable_poses(
     models: Sequence[ObjectModel], n: int, rng: np.random.Generator
@@ -62,11 +65,24 @@ def draw_poses(
         theta = rng.uniform(-np.pi, np.pi, m)
         r, a = R * np.sqrt(rng.random(m)), rng.uniform(-np.pi, np.pi, m)
         t = r[:, None] * np.stack([np.cos(a), np.sin(a)], axis=1)  # relative to the centre
-        posed = rotate(rotation_matrices(theta), stable.outline) + t[:, None]
-        ok = np.all(np.hypot(posed[..., 0], posed[..., 1]) <= R * (1 - LENGTH_SLACK), axis=1)
+        ok = _inside(stable, theta, t, R * (1 - LENGTH_SLACK))
         theta_out.append(theta[ok])
         t_out.append(t[ok] + centre)
         have += int(ok.sum())
     if have < n:
         raise PlannerError("no pose of the object fits in the safe circle", field="workspace")
     return np.concatenate(theta_out)[:n], np.concatenate(t_out)[:n]
+
+
+def _inside(stable: StablePose, theta: np.ndarray, t: np.ndarray, limit: float) -> np.ndarray:
+    """(m,) every vertex of the outline posed at (theta, t) lies within `limit` of the
+    origin. A pose whose farthest vertex cannot reach the limit passes unposed; the
+    others are posed a bounded number of vertices at a time."""
+    ok = np.hypot(t[:, 0], t[:, 1]) + stable.radius <= limit
+    near = np.flatnonzero(~ok)
+    step = max(1, _POSED_VERTICES // len(stable.outline))
+    for k in range(0, len(near), step):
+        at = near[k : k + step]
+        posed = rotate(rotation_matrices(theta[at]), stable.outline) + t[at, None]
+        ok[at] = np.all(np.hypot(posed[..., 0], posed[..., 1]) <= limit, axis=1)
+    return ok

@@ -15,16 +15,32 @@ from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
 import numpy as np
+import shapely
 
 from planner.errors import PlanningNotPossibleError
-from planner.geometry import LENGTH_SLACK, rotate, rotation_matrices
+from planner.geometry import (
+    LENGTH_SLACK,
+    point_segment_distance,
+    rotate,
+    rotation_matrices,
+    signed_area,
+)
+from planner.memo import SharedCache, array_key
 from planner.models.prior import draw_poses, draw_stable_poses
 from planner.planning.candidates import Candidates, paths_through
 from planner.planning.intersection_aims import union_centre
 from planner.planning.posed_set import PosedSet
 from planner.planning.result import PlannedPath, opening_path
 from planner.planning.scoring import motion_cost
-from planner.types import Contact, Hypothesis, ObjectModel, SensingPath, SensorBounds, Workspace
+from planner.types import (
+    Contact,
+    Hypothesis,
+    ObjectModel,
+    SensingPath,
+    SensorBounds,
+    StablePose,
+    Workspace,
+)
 
 if TYPE_CHECKING:
     from planner.planning.config import StrategyConfig
@@ -113,9 +129,11 @@ def search_chord(
             float(centre[1]),
         )
     rho = np.linspace(-R, R, offsets + 2)[1:-1]  # (O,)
-    # share of the surviving draws met: lo < rho < hi
-    inside = (lo.T[:, None, :] < rho[None, :, None]) & (rho[None, :, None] < hi.T[:, None, :])
-    score = inside.mean(axis=2).ravel()  # (A * O,)
+    # share of the surviving draws met, lo < rho < hi: as lo < hi, the draws with
+    # lo < rho less those with hi <= rho (counted on each angle's sorted extents)
+    below = np.stack([np.searchsorted(v, rho, side="left") for v in np.sort(lo, axis=0).T])
+    past = np.stack([np.searchsorted(v, rho, side="right") for v in np.sort(hi, axis=0).T])
+    score = ((below - past) / len(lo)).ravel()  # (A * O,)
     a_idx, o_idx = np.divmod(np.arange(score.size), len(rho))
     half = np.sqrt(R**2 - rho[o_idx] ** 2)
     n = normal[a_idx]
@@ -143,55 +161,96 @@ def _prior_extents(
     samples: int,
 ) -> tuple[np.ndarray, np.ndarray]:
     """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
-    centre, of the prior draws of the posed outline that no `missed` path meets."""
-    a = np.array([p.origin for p in missed], dtype=float)  # (M, 2) missed segments a -> b
-    b = a + np.array([np.multiply(p.length, p.direction) for p in missed], dtype=float)
+    centre, of the prior draws of the posed outline that no `missed` path meets.
+
+    The work grows with the draws and the hull's vertices' logarithm, not with
+    how finely the outline is drawn: a missed path is tested against the outline
+    in the object's frame (an indexed shapely query), and the extents come from
+    the convex hull's support function."""
+    a = np.array([p.origin for p in missed], dtype=float).reshape(-1, 2)  # (M, 2) a -> b
+    b = a + np.array([np.multiply(p.length, p.direction) for p in missed]).reshape(-1, 2)
     centre = np.asarray(workspace.center, dtype=float)
+    alpha = np.arctan2(normal[:, 1], normal[:, 0])  # (A,)
     lo, hi = [], []
-    for posed in _prior_draws(models, workspace, samples):
-        # a segment meets an outline it starts outside of exactly when it crosses a face
-        s, e = posed[:, :, None, :], np.roll(posed, -1, axis=1)[:, :, None, :]  # (n, V, 1, 2)
-        crosses = (_turn(a, b, s) * _turn(a, b, e) <= 0) & (_turn(s, e, a) * _turn(s, e, b) <= 0)
-        met = crosses.any(axis=(1, 2))
-        proj = (posed[~met] - centre) @ normal.T  # (n, V, A)
-        lo.append(proj.min(axis=1))
-        hi.append(proj.max(axis=1))
+    for stable, theta, t in _prior_draws(models, workspace, samples):
+        Rt = rotation_matrices(-theta)  # (n, 2, 2): world offsets into the object's frame
+        ring = shapely.LinearRing(stable.outline)
+        shapely.prepare(ring)
+        met = np.zeros(len(theta), dtype=bool)
+        for start, end in zip(a, b, strict=True):
+            # only a path passing within the farthest vertex's reach of the origin can meet
+            near = np.flatnonzero(point_segment_distance(t, start, end) <= stable.radius)
+            ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
+            met[near] |= shapely.intersects(ring, shapely.linestrings(rotate(Rt[near], ends)))
+        keep = ~met
+        # projection of R(theta) v + t - centre on n_a: h(alpha_a - theta) + (t - centre).n_a
+        phi = alpha[None, :] - theta[keep, None]  # (n, A)
+        shift = (t[keep] - centre) @ normal.T
+        lo.append(shift - _support(stable.outline, phi + math.pi))
+        hi.append(shift + _support(stable.outline, phi))
     return np.concatenate(lo), np.concatenate(hi)
 
 
-def _turn(p: np.ndarray, q: np.ndarray, r: np.ndarray) -> np.ndarray:
-    """Sign of the turn p -> q -> r (cross product of q - p and r - p), broadcast."""
-    return np.sign(
-        (q[..., 0] - p[..., 0]) * (r[..., 1] - p[..., 1])
-        - (q[..., 1] - p[..., 1]) * (r[..., 0] - p[..., 0])
-    )
+def _support(outline: np.ndarray, phi: np.ndarray) -> np.ndarray:
+    """The support function of `outline` at angles `phi` (any shape): the greatest
+    projection of its vertices on the unit vector at each angle, found on the convex
+    hull by the angle of its faces' outward normals (exact, log of the hull's size).
+
+    >>> sq = np.array([[-1.0, -1.0], [1.0, -1.0], [1.0, 1.0], [-1.0, 1.0]])
+    >>> np.round(_support(sq, np.array([0.0, np.pi / 4, np.pi])), 6).tolist()
+    [1.0, 1.414214, 1.0]
+    """
+    hull = _hull(outline)  # counter-clockwise, no repeated vertex
+    edge = np.roll(hull, -1, axis=0) - hull
+    beta = np.arctan2(-edge[:, 0], edge[:, 1])  # outward normal of face i (hull[i] -> hull[i+1])
+    first = int(np.argmin(beta))
+    beta = np.roll(beta, -first)  # increasing from its least
+    order = (np.arange(len(hull)) + first) % len(hull)
+    # vertex i + 1 is extreme between the normals of faces i and i + 1
+    x = np.mod(phi - beta[0], 2 * math.pi) + beta[0]
+    k = order[(np.searchsorted(beta, x, side="left") - 1) % len(hull)]
+    best = hull[(k + 1) % len(hull)]
+    return best[..., 0] * np.cos(phi) + best[..., 1] * np.sin(phi)
 
 
-#: Prior draws per (objects, safe circle, count): fixed, so kept (with their objects,
-#: which keeps the ids in the key valid).
-_DRAWS: dict[tuple, tuple[list, list[np.ndarray]]] = {}
+def _hull(outline: np.ndarray) -> np.ndarray:
+    """The convex hull's vertices of `outline`, counter-clockwise."""
+    ring = np.asarray(shapely.MultiPoint(outline).convex_hull.exterior.coords)[:-1]
+    return ring[::-1] if signed_area(ring) < 0 else ring
+
+
+#: Prior draws per (objects' numbers, safe circle, count), for the process: every
+#: session on the same parts makes the same fixed draws (a service rebuilds the
+#: parts per session, so their identities would never match): (stable pose, theta,
+#: t) per stable pose drawn, a few numbers per draw whatever the outline.
+_DRAWS: SharedCache[list[tuple[StablePose, np.ndarray, np.ndarray]]] = SharedCache(
+    64, lambda groups: 1
+)
 
 
 def _prior_draws(
     models: Mapping[str, ObjectModel], workspace: Workspace, samples: int
-) -> list[np.ndarray]:
-    """`samples` fixed draws of the posed outline from the prior, grouped by stable
-    pose: a list of (n, V, 2) world vertex arrays."""
+) -> list[tuple[StablePose, np.ndarray, np.ndarray]]:
+    """`samples` fixed draws of the pose from the prior, grouped by stable pose:
+    (stable pose, theta (n,), t (n, 2)) with ``v_world = R(theta) v + t``."""
     items = list(models.values())
-    key = (tuple(id(m) for m in items), workspace.center, workspace.radius, samples)
-    if key not in _DRAWS:
+    weights = [[1.0 if m.prior is None else m.prior] for m in items]
+    weights += [[p.probability for p in m.stable_poses] for m in items]
+    outlines = [p.outline for m in items for p in m.stable_poses]
+    counts = [len(items), *(len(m.stable_poses) for m in items)]
+    where = [[*workspace.center, workspace.radius, samples], counts]
+    key = array_key([*map(np.asarray, where + weights), *outlines])
+
+    def draw() -> list[tuple[StablePose, np.ndarray, np.ndarray]]:
         rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
         drawn = Counter(draw_stable_poses(items, samples, rng))
         groups = []
         for (i, j), n in sorted(drawn.items()):
             stable = items[i].stable_poses[j]
-            theta, t = draw_poses(stable, workspace, n, rng)
-            # v_world = R(theta) v + t
-            groups.append(rotate(rotation_matrices(theta), stable.outline) + t[:, None])
-        if len(_DRAWS) >= 16:
-            _DRAWS.pop(next(iter(_DRAWS)))
-        _DRAWS[key] = (items, groups)
-    return _DRAWS[key][1]
+            groups.append((stable, *draw_poses(stable, workspace, n, rng)))
+        return groups
+
+    return _DRAWS.get(key, draw)
 
 
 def _chords(aim: np.ndarray, angles: np.ndarray, workspace: Workspace, source: str) -> Candidates:
