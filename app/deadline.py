@@ -15,7 +15,10 @@ slow job is most often one that shared the machine with others.
 from __future__ import annotations
 
 import ctypes
+import heapq
+import itertools
 import threading
+import time
 from collections.abc import Callable
 from typing import Any, TypeVar
 
@@ -57,6 +60,43 @@ class _Job:
                 _set_async_exc(self.thread_id, ctypes.py_object())
 
 
+class _Watchdog:
+    """One thread per process firing the jobs whose deadline passed (a timer thread
+    per job cost a thread start on every request). Jobs wait in a heap by
+    deadline; one that ended is dropped when its deadline comes."""
+
+    def __init__(self) -> None:
+        self._due: list[tuple[float, int, _Job]] = []
+        self._wake = threading.Condition()
+        self._count = itertools.count()
+        self._thread: threading.Thread | None = None
+
+    def watch(self, job: _Job, seconds: float) -> None:
+        entry = (time.monotonic() + seconds, next(self._count), job)
+        with self._wake:
+            if self._thread is None:
+                self._thread = threading.Thread(target=self._run, name="deadline", daemon=True)
+                self._thread.start()
+            heapq.heappush(self._due, entry)
+            if self._due[0] is entry:  # the earliest now: the thread waits for it
+                self._wake.notify()
+
+    def _run(self) -> None:
+        with self._wake:
+            while True:
+                if not self._due:
+                    self._wake.wait()
+                    continue
+                wait = self._due[0][0] - time.monotonic()
+                if wait > 0:
+                    self._wake.wait(wait)
+                    continue
+                heapq.heappop(self._due)[2].fire()
+
+
+_watchdog = _Watchdog()
+
+
 def with_deadline(fn: Callable[..., _T], seconds: float | None) -> Callable[..., _T]:
     """`fn` run in the calling thread, stopped with :class:`JobStoppedError` after
     `seconds` (None: never)."""
@@ -65,14 +105,11 @@ def with_deadline(fn: Callable[..., _T], seconds: float | None) -> Callable[...,
 
     def run(*args: Any) -> _T:
         job = _Job(threading.get_ident())
-        timer = threading.Timer(seconds, job.fire)
-        timer.daemon = True
         try:
-            timer.start()
+            _watchdog.watch(job, seconds)
             try:
                 result = fn(*args)
             finally:
-                timer.cancel()
                 job.end()
         except JobStoppedError:
             raise JobStoppedError(f"stopped after {seconds:g} s") from None

@@ -45,6 +45,37 @@ def test_a_job_within_its_deadline_returns_and_nothing_is_raised_later():
         sum(range(1000))
 
 
+def test_a_short_deadline_set_after_a_long_one_still_fires_first():
+    # one watchdog serves every job: the later, shorter deadline must wake it
+    long_stop, long_reached, outcome = threading.Event(), [], []
+
+    def long_job():
+        try:
+            outcome.append(with_deadline(_spin, RUNAWAY * 2)(long_stop, long_reached))
+        except JobStoppedError:
+            outcome.append("stopped")
+
+    other = threading.Thread(target=long_job)
+    other.start()
+    try:
+        start = time.monotonic()
+        with pytest.raises(JobStoppedError):
+            with_deadline(_spin, 0.2)(threading.Event(), [])
+        assert time.monotonic() - start < RUNAWAY / 2
+    finally:
+        long_stop.set()
+        other.join()
+    assert outcome == ["done"]  # the long job ran to its end, untouched
+
+
+def test_jobs_share_one_watchdog_thread():
+    job = with_deadline(lambda x: x + 1, 5.0)
+    before = threading.active_count()
+    assert [job(i) for i in range(100)] == list(range(1, 101))
+    assert threading.active_count() <= max(before, 1) + 1
+    assert sum(t.name == "deadline" for t in threading.enumerate()) == 1
+
+
 def test_without_a_deadline_the_job_is_itself():
     def f():
         return 1
