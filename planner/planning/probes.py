@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections import Counter
 from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
 import numpy as np
@@ -131,8 +132,8 @@ def search_chord(
     rho = np.linspace(-R, R, offsets + 2)[1:-1]  # (O,)
     # share of the surviving draws met, lo < rho < hi: as lo < hi, the draws with
     # lo < rho less those with hi <= rho (counted on each angle's sorted extents)
-    below = np.stack([np.searchsorted(v, rho, side="left") for v in np.sort(lo, axis=0).T])
-    past = np.stack([np.searchsorted(v, rho, side="right") for v in np.sort(hi, axis=0).T])
+    below = np.stack([np.searchsorted(v, rho, side="left") for v in np.sort(lo.T, axis=1)])
+    past = np.stack([np.searchsorted(v, rho, side="right") for v in np.sort(hi.T, axis=1)])
     score = ((below - past) / len(lo)).ravel()  # (A * O,)
     a_idx, o_idx = np.divmod(np.arange(score.size), len(rho))
     half = np.sqrt(R**2 - rho[o_idx] ** 2)
@@ -163,17 +164,15 @@ def _prior_extents(
     """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
     centre, of the prior draws of the posed outline that no `missed` path meets.
 
-    The work grows with the draws and the hull's vertices' logarithm, not with
-    how finely the outline is drawn: a missed path is tested against the outline
-    in the object's frame (an indexed shapely query), and the extents come from
-    the convex hull's support function."""
+    The work grows with the draws, not with how finely the outline is drawn: a
+    missed path is tested against the outline in the object's frame (an indexed
+    shapely query) for the draws it passes near; the extents are the draws' own,
+    kept with them."""
     a = np.array([p.origin for p in missed], dtype=float).reshape(-1, 2)  # (M, 2) a -> b
     b = a + np.array([np.multiply(p.length, p.direction) for p in missed]).reshape(-1, 2)
-    centre = np.asarray(workspace.center, dtype=float)
-    alpha = np.arctan2(normal[:, 1], normal[:, 0])  # (A,)
     lo, hi = [], []
-    for stable, theta, t in _prior_draws(models, workspace, samples):
-        Rt = rotation_matrices(-theta)  # (n, 2, 2): world offsets into the object's frame
+    for draws in _prior_draws(models, workspace, samples, normal):
+        stable, theta, t = draws.stable, draws.theta, draws.t
         ring = shapely.LinearRing(stable.outline)
         shapely.prepare(ring)
         met = np.zeros(len(theta), dtype=bool)
@@ -181,13 +180,11 @@ def _prior_extents(
             # only a path passing within the farthest vertex's reach of the origin can meet
             near = np.flatnonzero(point_segment_distance(t, start, end) <= stable.radius)
             ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
-            met[near] |= shapely.intersects(ring, shapely.linestrings(rotate(Rt[near], ends)))
-        keep = ~met
-        # projection of R(theta) v + t - centre on n_a: h(alpha_a - theta) + (t - centre).n_a
-        phi = alpha[None, :] - theta[keep, None]  # (n, A)
-        shift = (t[keep] - centre) @ normal.T
-        lo.append(shift - _support(stable.outline, phi + math.pi))
-        hi.append(shift + _support(stable.outline, phi))
+            # world offsets into the object's frame
+            local = rotate(rotation_matrices(-theta[near]), ends)
+            met[near] |= shapely.intersects(ring, shapely.linestrings(local))
+        lo.append(draws.lo[~met])
+        hi.append(draws.hi[~met])
     return np.concatenate(lo), np.concatenate(hi)
 
 
@@ -219,35 +216,56 @@ def _hull(outline: np.ndarray) -> np.ndarray:
     return ring[::-1] if signed_area(ring) < 0 else ring
 
 
-#: Prior draws per (objects' numbers, safe circle, count), for the process: every
-#: session on the same parts makes the same fixed draws (a service rebuilds the
-#: parts per session, so their identities would never match): (stable pose, theta,
-#: t) per stable pose drawn, a few numbers per draw whatever the outline.
-_DRAWS: SharedCache[list[tuple[StablePose, np.ndarray, np.ndarray]]] = SharedCache(
-    64, lambda groups: 1
+@dataclass(frozen=True, eq=False)
+class _Draws:
+    """Prior draws of one stable pose: ``v_world = R(theta) v + t`` (n,) and (n, 2),
+    and each posed outline's least and greatest projection (n, A) on the normals,
+    relative to the centre."""
+
+    stable: StablePose
+    theta: np.ndarray
+    t: np.ndarray
+    lo: np.ndarray
+    hi: np.ndarray
+
+
+#: Prior draws per (objects' numbers, safe circle, count, normals), for the process:
+#: every session on the same parts makes the same fixed draws (a service rebuilds
+#: the parts per session, so their identities would never match). A few numbers
+#: per draw and normal, whatever the outline; bounded by their total.
+_DRAWS: SharedCache[list[_Draws]] = SharedCache(
+    16_000_000, lambda groups: sum(g.lo.size + g.hi.size + 3 * g.theta.size for g in groups)
 )
 
 
 def _prior_draws(
-    models: Mapping[str, ObjectModel], workspace: Workspace, samples: int
-) -> list[tuple[StablePose, np.ndarray, np.ndarray]]:
-    """`samples` fixed draws of the pose from the prior, grouped by stable pose:
-    (stable pose, theta (n,), t (n, 2)) with ``v_world = R(theta) v + t``."""
+    models: Mapping[str, ObjectModel], workspace: Workspace, samples: int, normal: np.ndarray
+) -> list[_Draws]:
+    """`samples` fixed draws of the pose from the prior, grouped by stable pose, with
+    their extents on each `normal` (A, 2) (the convex hull's support function)."""
     items = list(models.values())
     weights = [[1.0 if m.prior is None else m.prior] for m in items]
     weights += [[p.probability for p in m.stable_poses] for m in items]
     outlines = [p.outline for m in items for p in m.stable_poses]
     counts = [len(items), *(len(m.stable_poses) for m in items)]
-    where = [[*workspace.center, workspace.radius, samples], counts]
+    where = [[*workspace.center, workspace.radius, samples], counts, normal]
     key = array_key([*map(np.asarray, where + weights), *outlines])
 
-    def draw() -> list[tuple[StablePose, np.ndarray, np.ndarray]]:
+    def draw() -> list[_Draws]:
         rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
         drawn = Counter(draw_stable_poses(items, samples, rng))
+        centre = np.asarray(workspace.center, dtype=float)
+        alpha = np.arctan2(normal[:, 1], normal[:, 0])  # (A,)
         groups = []
         for (i, j), n in sorted(drawn.items()):
             stable = items[i].stable_poses[j]
-            groups.append((stable, *draw_poses(stable, workspace, n, rng)))
+            theta, t = draw_poses(stable, workspace, n, rng)
+            # projection of R(theta) v + t - centre on n_a: h(alpha_a - theta) + (t - centre).n_a
+            phi = alpha[None, :] - theta[:, None]  # (n, A)
+            shift = (t - centre) @ normal.T
+            lo = shift - _support(stable.outline, phi + math.pi)
+            hi = shift + _support(stable.outline, phi)
+            groups.append(_Draws(stable, theta, t, lo, hi))
         return groups
 
     return _DRAWS.get(key, draw)

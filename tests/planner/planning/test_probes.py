@@ -15,6 +15,7 @@ from planner.planning.probes import _prior_draws, _prior_extents, _support, sear
 from planner.types import SensingPath, Workspace
 
 WORKSPACE = Workspace((10.0, -5.0), 150.0)
+NORMAL = np.array([[1.0, 0.0], [0.0, 1.0]])
 ELL = [[0, 0], [40, 0], [40, 12], [12, 12], [12, 30], [0, 30]]
 
 
@@ -53,7 +54,8 @@ def test_extents_are_those_of_every_posed_draw_no_missed_path_meets():
     # the reference: pose every draw, drop those a missed path comes to within
     # rounding of, project every vertex
     want_lo, want_hi = [], []
-    for stable, theta, t in _prior_draws(models, WORKSPACE, 512):
+    for draws in _prior_draws(models, WORKSPACE, 512, normal):
+        stable, theta, t = draws.stable, draws.theta, draws.t
         posed = rotate(rotation_matrices(theta), stable.outline) + t[:, None]
         start, end = posed, np.roll(posed, -1, axis=1)
         met = np.zeros(len(theta), dtype=bool)
@@ -73,9 +75,13 @@ def test_sessions_on_rebuilt_parts_share_the_prior_draws():
     # a service builds the parts again for every session: the draws are the same
     first = {"ell": object_from_dict({"name": "ell", "outline": ELL})}
     again = {"ell": object_from_dict({"name": "ell", "outline": ELL})}
-    assert _prior_draws(first, WORKSPACE, 256) is _prior_draws(again, WORKSPACE, 256)
+    assert _prior_draws(first, WORKSPACE, 256, NORMAL) is _prior_draws(
+        again, WORKSPACE, 256, NORMAL
+    )
     moved = Workspace((11.0, -5.0), 150.0)
-    assert _prior_draws(first, moved, 256) is not _prior_draws(first, WORKSPACE, 256)
+    assert _prior_draws(first, moved, 256, NORMAL) is not _prior_draws(
+        first, WORKSPACE, 256, NORMAL
+    )
 
 
 def test_a_finely_drawn_part_searches_within_bounded_memory():
