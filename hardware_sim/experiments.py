@@ -224,11 +224,17 @@ class _TrialTimeoutError(Exception):
     pass
 
 
+#: How soon a trial's time limit is raised again when the first raise was lost.
+_RETRY_S = 0.05
+
+
 @contextmanager
 def _time_limit(seconds: float | None) -> Iterator[None]:
     """Raise _TrialTimeoutError after `seconds` of wall time (SIGALRM; only in a
     process's main thread on POSIX, elsewhere no limit). The signal is handled
-    between Python bytecodes, so one long C call overruns the limit."""
+    between Python bytecodes, so one long C call overruns the limit. The alarm
+    repeats every `_RETRY_S` until the block ends: an exception raised while a
+    garbage-collector callback or a finalizer runs is swallowed there."""
     usable = (
         seconds is not None
         and hasattr(signal, "setitimer")
@@ -242,7 +248,7 @@ def _time_limit(seconds: float | None) -> Iterator[None]:
         raise _TrialTimeoutError
 
     previous = signal.signal(signal.SIGALRM, expire)
-    signal.setitimer(signal.ITIMER_REAL, float(seconds or 0.0))
+    signal.setitimer(signal.ITIMER_REAL, float(seconds or 0.0), _RETRY_S)
     try:
         yield
     finally:

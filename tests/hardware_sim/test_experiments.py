@@ -2,9 +2,11 @@
 
 from __future__ import annotations
 
+import gc
 import math
 import sys
 import threading
+import time
 from dataclasses import replace
 
 import numpy as np
@@ -19,7 +21,15 @@ from hardware_sim.client import (
     outline_distance,
     run_recognition,
 )
-from hardware_sim.experiments import ExperimentSpec, TrialResult, _seed, run_experiment, run_trial
+from hardware_sim.experiments import (
+    ExperimentSpec,
+    TrialResult,
+    _seed,
+    _time_limit,
+    _TrialTimeoutError,
+    run_experiment,
+    run_trial,
+)
 from hardware_sim.presets import build_arm
 from hardware_sim.protocol import ProbeResult
 from hardware_sim.summary import BINS, histogram, summarize
@@ -180,6 +190,27 @@ def test_a_trial_past_its_timeout_counts_as_unlocalized():
     assert [r.status for r in results] == ["timeout", "timeout"]
     row = summarize(results, ["pdm"], 6)[0]
     assert row.histogram[">10"] == 1.0 and row.success_rate == 0.0 and row.mean_touches == 6
+
+
+@pytest.mark.filterwarnings("ignore::pytest.PytestUnraisableExceptionWarning")
+def test_a_time_limit_raised_where_it_is_swallowed_is_raised_again():
+    # the alarm lands in a garbage-collector callback, which swallows what it
+    # raises (as hypothesis' callback once did in a trial): the limit still holds
+    def slow_callback(phase, info):
+        if phase == "start":
+            end = time.monotonic() + 0.05
+            while time.monotonic() < end:
+                pass
+
+    gc.callbacks.append(slow_callback)
+    try:
+        with pytest.raises(_TrialTimeoutError), _time_limit(0.01):
+            gc.collect()
+            give_up = time.monotonic() + 5.0
+            while time.monotonic() < give_up:
+                sum(range(100))
+    finally:
+        gc.callbacks.remove(slow_callback)
 
 
 def test_centred_worlds_are_met_by_the_first_probe():
