@@ -59,6 +59,16 @@ def warm_up() -> float:
             observations=session.observations,
             session=session,
         )
+    # the search after a miss, before any contact
+    miss = SensingPath((0.0, 100.0), (0.0, -1.0), 200.0)
+    plan(
+        [],
+        models,
+        session.bounds,
+        session.workspace,
+        (0.0, 100.0),
+        observations=[Observation(miss)],
+    )
     # kernels of paths so small a session does not take (many hits on one path)
     sorted_count(np.zeros((1, 1)), np.zeros(1, dtype=np.int64), np.zeros(1), "right")
     return time.perf_counter() - start

@@ -15,9 +15,11 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
+import numba
 import numpy as np
 import shapely
 
+from planner.compiled import c_array
 from planner.errors import PlanningNotPossibleError
 from planner.geometry import (
     LENGTH_SLACK,
@@ -164,28 +166,52 @@ def _prior_extents(
     """Least and greatest projection (N, A) on each `normal` (A, 2), relative to the
     centre, of the prior draws of the posed outline that no `missed` path meets.
 
-    The work grows with the draws, not with how finely the outline is drawn: a
-    missed path is tested against the outline in the object's frame (an indexed
-    shapely query) for the draws it passes near; the extents are the draws' own,
-    kept with them."""
+    A missed path is tested against the outline in the object's frame, for the
+    draws it passes near (a compiled pass over the faces); the extents are the
+    draws' own, kept with them."""
     a = np.array([p.origin for p in missed], dtype=float).reshape(-1, 2)  # (M, 2) a -> b
     b = a + np.array([np.multiply(p.length, p.direction) for p in missed]).reshape(-1, 2)
     lo, hi = [], []
     for draws in _prior_draws(models, workspace, samples, normal):
         stable, theta, t = draws.stable, draws.theta, draws.t
-        ring = shapely.LinearRing(stable.outline)
-        shapely.prepare(ring)
+        ring = c_array(stable.outline, dtype=float)
         met = np.zeros(len(theta), dtype=bool)
         for start, end in zip(a, b, strict=True):
             # only a path passing within the farthest vertex's reach of the origin can meet
             near = np.flatnonzero(point_segment_distance(t, start, end) <= stable.radius)
             ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
             # world offsets into the object's frame
-            local = rotate(rotation_matrices(-theta[near]), ends)
-            met[near] |= shapely.intersects(ring, shapely.linestrings(local))
+            local = c_array(rotate(rotation_matrices(-theta[near]), ends), dtype=float)
+            met[near] |= _meets_ring(local, ring)
         lo.append(draws.lo[~met])
         hi.append(draws.hi[~met])
     return np.concatenate(lo), np.concatenate(hi)
+
+
+@numba.njit(cache=True, nogil=True)
+def _meets_ring(segments, ring):  # type: ignore[no-untyped-def]
+    """(k,) whether each segment (k, 2, 2) meets a face of the closed `ring` (V, 2):
+    a path starting outside an outline meets it exactly when it crosses a face
+    (end points on a face count). Faces outside the segment's box are passed over."""
+    K, V = segments.shape[0], ring.shape[0]
+    out = np.zeros(K, dtype=np.bool_)
+    for k in range(K):
+        ax, ay = segments[k, 0, 0], segments[k, 0, 1]
+        bx, by = segments[k, 1, 0], segments[k, 1, 1]
+        lo_x, hi_x, lo_y, hi_y = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
+        for i in range(V):
+            sx, sy = ring[i, 0], ring[i, 1]
+            ex, ey = ring[(i + 1) % V, 0], ring[(i + 1) % V, 1]
+            if max(sx, ex) < lo_x or min(sx, ex) > hi_x or max(sy, ey) < lo_y or min(sy, ey) > hi_y:
+                continue
+            s_side = (bx - ax) * (sy - ay) - (by - ay) * (sx - ax)
+            e_side = (bx - ax) * (ey - ay) - (by - ay) * (ex - ax)
+            a_side = (ex - sx) * (ay - sy) - (ey - sy) * (ax - sx)
+            b_side = (ex - sx) * (by - sy) - (ey - sy) * (bx - sx)
+            if np.sign(s_side) * np.sign(e_side) <= 0 and np.sign(a_side) * np.sign(b_side) <= 0:
+                out[k] = True
+                break
+    return out
 
 
 def _support(outline: np.ndarray, phi: np.ndarray) -> np.ndarray:
