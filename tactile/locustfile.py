@@ -16,12 +16,15 @@ each robot's requests over several hosts at random, so that every host serves
 every session (as behind a reverse proxy); each request is then reported under
 its endpoint and host (``... @h0``). Observations are posted with
 ``?limit=LOADTEST_HYPOTHESES`` (default: no limit, the whole hypothesis list).
+Robot k of a run draws its worlds from ``LOADTEST_SEED`` (default 0) and k, and
+the sessions plan with seed 0, so runs compare like with like.
 The robots use locust's geventhttpclient user (keep-alive, far less CPU per
 request than python-requests), which matters when locust shares the machine.
 """
 
 from __future__ import annotations
 
+import itertools
 import json
 import math
 import os
@@ -42,7 +45,9 @@ MODELS = parse_objects({"objects": OBJECTS})
 WORKSPACE = Workspace((0.0, 0.0), 200.0)
 BOUNDS = SensorBounds(1.0, math.radians(3.0))
 #: 200,000 units of work (about 200 ms on the reference machine), the 1.5 s cap a safety net
-STRATEGY = {"name": os.environ.get("LOADTEST_STRATEGY", "pdm"), "budget_work": 200_000}
+STRATEGY = {"name": os.environ.get("LOADTEST_STRATEGY", "pdm"), "budget_work": 200_000, "seed": 0}
+SEED = int(os.environ.get("LOADTEST_SEED", "0"))
+_ROBOTS = itertools.count()
 MAX_TOUCHES = 12
 HYPOTHESES = os.environ.get("LOADTEST_HYPOTHESES", "")
 OBSERVE_QUERY = f"?limit={int(HYPOTHESES)}" if HYPOTHESES else ""
@@ -59,7 +64,9 @@ class _Fleet(FastHttpUser):
     default_headers = None if KEEPALIVE else {"Connection": "close"}
 
     def on_start(self) -> None:
-        self.rng = np.random.default_rng(abs(hash(id(self))) % 2**32)
+        # robot k of a run draws the same worlds in every run (LOADTEST_SEED): two runs
+        # of one fleet compare the service, not the worlds each happened to draw
+        self.rng = np.random.default_rng([SEED, next(_ROBOTS)])
         self.pick = np.random.default_rng(self.rng.integers(2**32))  # hosts, apart from worlds
 
     def _at(self, path: str, name: str) -> tuple[str, str]:
