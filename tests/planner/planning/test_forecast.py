@@ -229,7 +229,8 @@ def test_lookahead_takes_the_recognitions_ranking_when_it_predicts_better(monkey
     -> 0.99); without that rule (or as ``pdm``) the outcome model's ranking stands."""
     session = _curved_touched()
     where = (141.42, 141.42)
-    config = StrategyConfig(name=strategy, budget_ms=None)
+    # no work budget: how the budget cuts the judging is the next test's
+    config = StrategyConfig(name=strategy, budget_ms=None, budget_work=None)
     found = plan_session(session, where, config, 0)
     assert found.paths and found.paths[0].scored_by == "recognition"
     note = found.note or ""
@@ -497,13 +498,22 @@ def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best(mon
     of the paths it judged is predicted to leave fewer classes (some truths would
     split a class). The plan keeps the model's ranking; it used to fail looking
     for the first path predicted to leave fewer (an error, a 500 over HTTP). The
-    shortlist is judged in the order it is made (the screen, which now finds a
-    path predicted to leave fewer here, turned off) to reach that state."""
+    scene's own judging now finds such a path, so the judged paths' predictions
+    are set to leave as many classes as there are: the recognition still ranks
+    another path first, by the logarithm alone."""
     from planner.codec import observation_from_dict
-    from planner.planning import forecast
-
-    monkeypatch.setattr(forecast, "screened_log", lambda out, rows, *a: np.zeros(len(rows)))
     from planner.types import Accuracy
+
+    real, ahead = plan_module.recognition_ranking, []
+
+    def none_leaves_fewer(session, found, *args, **kwargs):
+        judged = real(session, found, *args, **kwargs)
+        if kwargs.get("first"):  # the model's best judged first
+            ahead.append(int(judged.rows[0]) != int(kwargs["first"][0]))
+        stay = np.full(len(judged.rows), float(judged.current))
+        return dataclasses.replace(judged, expected_classes=stay)
+
+    monkeypatch.setattr(plan_module, "recognition_ranking", none_leaves_fewer)
 
     models = [m for m in object_set("curved") if m.name == "d_shape"]
     origin, side = [184.91893179950094, 76.19047619047619], [-1.0, 6.123233995736766e-17]
@@ -528,6 +538,7 @@ def test_a_path_ahead_only_by_its_logarithm_does_not_replace_the_models_best(mon
     for o in observations:
         session = session.observe(observation_from_dict({"contact": None, **o}))
     found = plan_session(session, (200.0, 0.0), StrategyConfig(name="lookahead", budget_ms=None), 3)
+    assert ahead and ahead[0]  # the recognition put another path first
     assert found.paths and found.paths[0].scored_by == "outcome_model"
     assert "predicts a better path" not in (found.note or "")
 
