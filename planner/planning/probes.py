@@ -258,9 +258,10 @@ class _Draws:
 #: Prior draws per (objects' numbers, safe circle, count, normals), for the process:
 #: every session on the same parts makes the same fixed draws (a service rebuilds
 #: the parts per session, so their identities would never match). A few numbers
-#: per draw and normal, whatever the outline; bounded by their total.
+#: per draw and normal, whatever the outline; bounded by their total (4 million
+#: numbers, 32 MB: a dozen sets of parts at the default 4,096 draws).
 _DRAWS: SharedCache[list[_Draws]] = SharedCache(
-    16_000_000, lambda groups: sum(g.lo.size + g.hi.size + 3 * g.theta.size for g in groups)
+    4_000_000, lambda groups: sum(g.lo.size + g.hi.size + 3 * g.theta.size for g in groups)
 )
 
 
