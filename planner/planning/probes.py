@@ -15,11 +15,9 @@ from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import TYPE_CHECKING
 
-import numba
 import numpy as np
 import shapely
 
-from planner.compiled import c_array
 from planner.errors import PlanningNotPossibleError
 from planner.geometry import (
     LENGTH_SLACK,
@@ -35,13 +33,13 @@ from planner.planning.intersection_aims import union_centre
 from planner.planning.posed_set import PosedSet
 from planner.planning.result import PlannedPath, opening_path
 from planner.planning.scoring import motion_cost
+from planner.recognition.crossing import ring_edges, segments_meet
 from planner.types import (
     Contact,
     Hypothesis,
     ObjectModel,
     SensingPath,
     SensorBounds,
-    StablePose,
     Workspace,
 )
 
@@ -167,51 +165,25 @@ def _prior_extents(
     centre, of the prior draws of the posed outline that no `missed` path meets.
 
     A missed path is tested against the outline in the object's frame, for the
-    draws it passes near (a compiled pass over the faces); the extents are the
-    draws' own, kept with them."""
+    draws it passes near (the free-space check's compiled test: it meets the
+    outline when it crosses or touches an edge or lies inside); the extents are
+    the draws' own, kept with them."""
     a = np.array([p.origin for p in missed], dtype=float).reshape(-1, 2)  # (M, 2) a -> b
     b = a + np.array([np.multiply(p.length, p.direction) for p in missed]).reshape(-1, 2)
     lo, hi = [], []
     for draws in _prior_draws(models, workspace, samples, normal):
-        stable, theta, t = draws.stable, draws.theta, draws.t
-        ring = c_array(stable.outline, dtype=float)
+        theta, t = draws.theta, draws.t
         met = np.zeros(len(theta), dtype=bool)
         for start, end in zip(a, b, strict=True):
             # only a path passing within the farthest vertex's reach of the origin can meet
-            near = np.flatnonzero(point_segment_distance(t, start, end) <= stable.radius)
+            near = np.flatnonzero(point_segment_distance(t, start, end) <= draws.radius)
             ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
             # world offsets into the object's frame
-            local = c_array(rotate(rotation_matrices(-theta[near]), ends), dtype=float)
-            met[near] |= _meets_ring(local, ring)
+            local = rotate(rotation_matrices(-theta[near]), ends).reshape(-1, 4)
+            met[near] |= segments_meet(local, draws.edges)
         lo.append(draws.lo[~met])
         hi.append(draws.hi[~met])
     return np.concatenate(lo), np.concatenate(hi)
-
-
-@numba.njit(cache=True, nogil=True)
-def _meets_ring(segments, ring):  # type: ignore[no-untyped-def]
-    """(k,) whether each segment (k, 2, 2) meets a face of the closed `ring` (V, 2):
-    a path starting outside an outline meets it exactly when it crosses a face
-    (end points on a face count). Faces outside the segment's box are passed over."""
-    K, V = segments.shape[0], ring.shape[0]
-    out = np.zeros(K, dtype=np.bool_)
-    for k in range(K):
-        ax, ay = segments[k, 0, 0], segments[k, 0, 1]
-        bx, by = segments[k, 1, 0], segments[k, 1, 1]
-        lo_x, hi_x, lo_y, hi_y = min(ax, bx), max(ax, bx), min(ay, by), max(ay, by)
-        for i in range(V):
-            sx, sy = ring[i, 0], ring[i, 1]
-            ex, ey = ring[(i + 1) % V, 0], ring[(i + 1) % V, 1]
-            if max(sx, ex) < lo_x or min(sx, ex) > hi_x or max(sy, ey) < lo_y or min(sy, ey) > hi_y:
-                continue
-            s_side = (bx - ax) * (sy - ay) - (by - ay) * (sx - ax)
-            e_side = (bx - ax) * (ey - ay) - (by - ay) * (ex - ax)
-            a_side = (ex - sx) * (ay - sy) - (ey - sy) * (ax - sx)
-            b_side = (ex - sx) * (by - sy) - (ey - sy) * (bx - sx)
-            if np.sign(s_side) * np.sign(e_side) <= 0 and np.sign(a_side) * np.sign(b_side) <= 0:
-                out[k] = True
-                break
-    return out
 
 
 def _support(outline: np.ndarray, phi: np.ndarray) -> np.ndarray:
@@ -244,11 +216,13 @@ def _hull(outline: np.ndarray) -> np.ndarray:
 
 @dataclass(frozen=True, eq=False)
 class _Draws:
-    """Prior draws of one stable pose: ``v_world = R(theta) v + t`` (n,) and (n, 2),
-    and each posed outline's least and greatest projection (n, A) on the normals,
-    relative to the centre."""
+    """Prior draws of one stable pose: its outline's ring `edges` (E, 4) and farthest
+    vertex's distance from the model origin (`radius`), the poses
+    ``v_world = R(theta) v + t`` (n,) and (n, 2), and each posed outline's least and
+    greatest projection (n, A) on the normals, relative to the centre."""
 
-    stable: StablePose
+    edges: np.ndarray
+    radius: float
     theta: np.ndarray
     t: np.ndarray
     lo: np.ndarray
@@ -261,7 +235,8 @@ class _Draws:
 #: per draw and normal, whatever the outline; bounded by their total (4 million
 #: numbers, 32 MB: a dozen sets of parts at the default 4,096 draws).
 _DRAWS: SharedCache[list[_Draws]] = SharedCache(
-    4_000_000, lambda groups: sum(g.lo.size + g.hi.size + 3 * g.theta.size for g in groups)
+    4_000_000,
+    lambda groups: sum(g.lo.size + g.hi.size + 3 * g.theta.size + g.edges.size for g in groups),
 )
 
 
@@ -292,7 +267,8 @@ def _prior_draws(
             shift = (t - centre) @ normal.T
             lo = shift - _support(stable.outline, phi + math.pi)
             hi = shift + _support(stable.outline, phi)
-            groups.append(_Draws(stable, theta, t, lo, hi))
+            edges = ring_edges(shapely.Polygon(stable.outline))
+            groups.append(_Draws(edges, stable.radius, theta, t, lo, hi))
         return groups
 
     return _DRAWS.get(key, draw)
