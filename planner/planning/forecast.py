@@ -72,6 +72,13 @@ def forecast_distinguishing(
     if not hypotheses:
         return None
     budget = budget or Budget()
+    cls = np.array([h.equivalence_class for h in hypotheses])
+    weight = np.bincount(cls, weights=[h.probability for h in hypotheses])
+    # hypotheses come most probable first: each class' first row is its best member
+    _, first = np.unique(cls, return_index=True)
+    total, size = 0.0, update_size(session)
+    if not budget.affords_updates(len(first), size):
+        return None  # it would stop before the last class: not even started
     # the ball tip's centre is what the session observes: cast the grown outlines
     models = grown_models(session.models_by_name, session.sensor.tip_radius)
     posed = pose_hypotheses(hypotheses, models, path.height)
@@ -83,13 +90,6 @@ def forecast_distinguishing(
         session.working_sensor,
         config or OutcomeConfig(),
     )
-    cls = np.array([h.equivalence_class for h in hypotheses])
-    weight = np.bincount(cls, weights=[h.probability for h in hypotheses])
-    # hypotheses come most probable first: each class' first row is its best member
-    _, first = np.unique(cls, return_index=True)
-    total, size = 0.0, update_size(session)
-    if not budget.affords_updates(len(first), size):
-        return None  # it would stop before the last class: not even started
     for k, row in zip(cls[first], first, strict=True):
         if budget.exhausted():
             return None

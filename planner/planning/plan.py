@@ -38,7 +38,12 @@ from planner.planning.forecast import (
 from planner.planning.planned import planned
 from planner.planning.probes import opening_probe
 from planner.planning.refining_paths import one_class_paths, refining_paths
-from planner.planning.representatives import face_counts, representatives
+from planner.planning.representatives import (
+    SAMPLE_FACES,
+    face_counts,
+    representatives,
+    weighted_sample,
+)
 from planner.planning.result import Plan, PlannedPath
 from planner.planning.strategies import Ranking, rank_candidates
 from planner.recognition.session import Session
@@ -91,12 +96,16 @@ def _plan_session(
     # may not spend it, and the forecast may spend what the search left
     share = total if total is None or not config.forecast else total * (1 - FORECAST_SHARE)
     budget = Budget(share, config.budget_ms)
-    # one hypothesis per class where the posed faces are many (a finely drawn curve)
-    faces = face_counts(session.hypotheses, session.models_by_name)
+    # one hypothesis per class where the posed faces are many (a finely drawn curve),
+    # a weighted sample of them where even those are too many
+    by_name = session.models_by_name
+    faces = face_counts(session.hypotheses, by_name)
+    reps = representatives(
+        session.hypotheses, session.symmetry_tolerance, session.joined_classes, faces
+    )
+    sample = weighted_sample(reps, face_counts(reps, by_name))
     result = plan(
-        representatives(
-            session.hypotheses, session.symmetry_tolerance, session.joined_classes, faces
-        ),
+        sample,
         session.models,
         session.working_sensor,
         session.workspace,
@@ -109,7 +118,36 @@ def _plan_session(
         budget=budget,
     )
     budget.raise_to(total)
+    if len(sample) < len(reps):
+        return _on_sample(result, len(sample), len(reps))
     return with_forecast(result, session, config.forecast, budget, config.outcome)
+
+
+def _on_sample(result: Plan, drawn: int, total: int) -> Plan:
+    """A plan ranked on a weighted sample of the hypotheses: no touch is sure to
+    leave one class while the hypotheses left out may survive it, so P(DM) is
+    reported as its lower bound, 0 (and a path the sample calls distinguishing,
+    informative); the ranking stands. Not forecast: the recognition would judge
+    every class."""
+    paths = tuple(
+        dataclasses.replace(
+            p,
+            p_distinguishing=0.0,
+            p_forecast=None,
+            family="informative" if p.family == "distinguishing" else p.family,
+        )
+        for p in result.paths
+    )
+    note = (
+        f"ranked on a weighted sample of {drawn} of {total} hypotheses (their posed faces "
+        f"over {SAMPLE_FACES}); P(DM) counts those left out as surviving"
+    )
+    return dataclasses.replace(
+        result,
+        paths=paths,
+        truncated=True,
+        note="; ".join(filter(None, [note, result.note])),
+    )
 
 
 def plan(

@@ -27,13 +27,18 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Mapping, Sequence
 
+import numpy as np
+
 from planner.types import ErrorBound, Hypothesis, ObjectModel
 
-__all__ = ["PLAN_FACES", "face_counts", "representatives"]
+__all__ = ["PLAN_FACES", "SAMPLE_FACES", "face_counts", "representatives", "weighted_sample"]
 
 #: Posed faces (hypotheses x faces each) above which a plan works on one
 #: representative per class.
 PLAN_FACES = 12_000
+#: Posed faces above which, even one per class, a plan works on a weighted sample
+#: of the hypotheses (exact contacts on a finely drawn curve: ten thousand classes).
+SAMPLE_FACES = 100_000
 
 
 def face_counts(hypotheses: Sequence[Hypothesis], models: Mapping[str, ObjectModel]) -> list[int]:
@@ -77,3 +82,40 @@ def representatives(
         )
     out.sort(key=lambda h: (-h.probability, h.equivalence_class))
     return out
+
+
+def weighted_sample(
+    hypotheses: Sequence[Hypothesis], faces_each: Sequence[int], limit: int | None = None
+) -> list[Hypothesis]:
+    """The hypotheses a plan can afford: all of them when their posed faces
+    (`faces_each`) are at most `limit` (default `SAMPLE_FACES`), else a
+    systematic sample by probability of about `limit` faces' worth, each drawn
+    one carrying its share of the draws (a hypothesis likelier than one draw is
+    always drawn, with its own weight or more). When the draws fall in one class,
+    the most probable hypothesis of another joins them, so that a plan never
+    takes a sample for one class.
+    Deterministic; order (most probable first) and class numbers are kept.
+
+    >>> from planner.types import ErrorBound, Hypothesis, Pose
+    >>> h = [Hypothesis("a", 0, (k,), Pose(k, 0, 0), ErrorBound(1, 0.1, 2), p, k)
+    ...      for k, p in enumerate([0.5, 0.2, 0.1, 0.1, 0.1])]
+    >>> [(r.equivalence_class, r.probability) for r in weighted_sample(h, [10] * 5, 20)]
+    [(0, 0.5), (2, 0.5)]
+    """
+    limit = SAMPLE_FACES if limit is None else limit
+    counts = np.asarray(faces_each, dtype=float)
+    if counts.sum() <= limit or len(hypotheses) < 2:
+        return list(hypotheses)
+    draws = max(2, int(len(hypotheses) * limit / counts.sum()))
+    weight = np.array([h.probability for h in hypotheses], dtype=float)
+    cumulative = np.cumsum(weight) / weight.sum()
+    picks = np.minimum(
+        np.searchsorted(cumulative, (np.arange(draws) + 0.5) / draws), len(hypotheses) - 1
+    )
+    rows, times = np.unique(picks, return_counts=True)
+    chosen = {int(r): int(n) / draws for r, n in zip(rows, times, strict=True)}
+    classes = {hypotheses[r].equivalence_class for r in chosen}
+    other = next((k for k, h in enumerate(hypotheses) if h.equivalence_class not in classes), None)
+    if len(classes) == 1 and other is not None:
+        chosen[other] = float(weight[other] / weight.sum())
+    return [dataclasses.replace(hypotheses[r], probability=p) for r, p in sorted(chosen.items())]

@@ -7,14 +7,17 @@ import math
 
 import numpy as np
 import pytest
+from hypothesis import given, settings
+from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
+from planner.planning import plan as plan_module
 from planner.planning import representatives as reps
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
 from planner.recognition.equivalence import PosedRings, pair_distances
 from planner.recognition.session import Session
-from planner.types import SensorBounds
+from planner.types import ErrorBound, Hypothesis, Pose, SensorBounds
 from tests.conftest import WORKSPACE, object_set
 
 BOUNDS = SensorBounds(1.0, math.radians(3))
@@ -68,3 +71,52 @@ def test_a_plan_on_representatives_is_seeded_and_offers_paths(monkeypatch):
     a = plan_session(session, (200.0, 0.0), config, 3)
     b = plan_session(session, (200.0, 0.0), config, 3)
     assert a.paths and [p.path for p in a.paths] == [p.path for p in b.paths]
+
+
+@settings(max_examples=200, deadline=None)
+@given(
+    st.lists(
+        st.tuples(st.floats(1e-6, 1.0), st.integers(0, 5), st.integers(1, 30)),
+        min_size=1,
+        max_size=60,
+    ),
+    st.integers(1, 400),
+)
+def test_a_weighted_sample_keeps_the_likely_hypotheses_and_two_classes(rows, limit):
+    total = sum(p for p, _, _ in rows)
+    hyps = [
+        Hypothesis("a", 0, (k,), Pose(k, 0, 0), ErrorBound(1, 0.1, 2), p / total, c)
+        for k, (p, c, _) in enumerate(rows)
+    ]
+    faces = [f for _, _, f in rows]
+    out = reps.weighted_sample(hyps, faces, limit)
+    if sum(faces) <= limit:
+        assert out == hyps
+        return
+    # most probable first, as given; each drawn once
+    index = [h.assignment[0] for h in out]
+    assert index == sorted(set(index))
+    draws = max(2, int(len(hyps) * limit / sum(faces)))
+    for h in hyps:  # a hypothesis likelier than one draw is always drawn
+        if h.probability >= 1 / draws:
+            assert h.assignment[0] in index
+    classes = {h.equivalence_class for h in hyps}
+    assert len({h.equivalence_class for h in out}) >= min(2, len(classes))
+    assert len(out) <= draws + 1
+
+
+def test_a_plan_on_a_sample_claims_no_sure_touch(monkeypatch):
+    monkeypatch.setattr(reps, "PLAN_FACES", 0)
+    monkeypatch.setattr(reps, "SAMPLE_FACES", 200)
+    session = touched(1, 1)
+    planned = []
+    real = plan_module.plan
+    monkeypatch.setattr(
+        plan_module, "plan", lambda hyps, *a, **k: planned.append(len(hyps)) or real(hyps, *a, **k)
+    )
+    result = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 3)
+    faces = len(session.models[0].stable_poses[0].all_faces.start)
+    assert planned[0] <= 200 // faces + 2 < len({h.equivalence_class for h in session.hypotheses})
+    assert result.paths and result.truncated and "weighted sample" in result.note
+    assert all(p.p_distinguishing == 0 and p.p_forecast is None for p in result.paths)
+    assert all(p.family != "distinguishing" for p in result.paths)
