@@ -38,8 +38,10 @@ from planner.geometry import LENGTH_SLACK
 from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
+from planner.planning.candidates import Candidates
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
-from planner.planning.posed_set import pose_hypotheses
+from planner.planning.pose_spread import agreement
+from planner.planning.posed_set import PosedSet, pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
 from planner.planning.screen import screened_log
@@ -232,7 +234,9 @@ def recognition_ranking(
         shortlist = np.concatenate([ahead, shortlist[~np.isin(shortlist, ahead)]])
     rows, p_dm, expected, logs = [], [], [], []
     size = update_size(session)
-    for c in shortlist:
+    # the share of each prediction that holds wherever the class may lie
+    trust = _trusted(session, posed, cands, out, shortlist, top, best)
+    for j, c in enumerate(shortlist):
         if rows and budget.exhausted():
             break
         if len(rows) >= SHORTLIST and min(expected) < current - 1e-9:
@@ -241,9 +245,10 @@ def recognition_ranking(
         budget.spend_updates(len(best), size)
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
-        p_dm.append(float(weight @ (left == 1)))
-        expected.append(float(weight @ left))
-        logs.append(float(weight @ np.log(left)))
+        share = weight * trust[j]  # the rest of each class' weight: nothing changes
+        p_dm.append(float(share @ (left == 1)))
+        expected.append(float(share @ left + (1.0 - trust[j]) @ weight * current))
+        logs.append(float(share @ np.log(left) + (1.0 - trust[j]) @ weight * np.log(current)))
         if until_sure and expected[-1] <= 1 + 1e-9:
             break  # it settles every truth: nothing judged later can rank above it
     # the logarithms tie to 9 decimals (halving paths alike); P(DM) and the classes
@@ -258,6 +263,41 @@ def recognition_ranking(
         current,
         float(posed.class_weight[top].sum() / posed.class_weight.sum()),
     )
+
+
+def _trusted(
+    session: Session,
+    posed: PosedSet,
+    cands: Candidates,
+    out: Outcomes,
+    rows: np.ndarray,
+    top: np.ndarray,
+    best: np.ndarray,
+) -> np.ndarray:
+    """(n, k) for each candidate of `rows` and each class of `top` (its posed best
+    member `best`), the share of the class' poses whose outcome agrees with the
+    nominal one (:func:`planner.planning.pose_spread.agreement`; 1 at other
+    probing heights)."""
+    trust = np.ones((len(rows), len(top)))
+    default = np.isnan(cands.height[rows])  # type: ignore[index]
+    if not default.any():
+        return trust
+    labels = posed.class_ids[top]
+    lead: dict[int, Hypothesis] = {}
+    for h in session.hypotheses:  # most probable first
+        lead.setdefault(h.equivalence_class, h)
+    if any(int(c) not in lead for c in labels):
+        return trust
+    at = rows[default]
+    trust[default] = agreement(
+        session,
+        [lead[int(c)] for c in labels],
+        out.hit[np.ix_(at, best)],
+        cands.origins[at],
+        cands.directions[at],
+        cands.lengths[at],
+    )
+    return trust
 
 
 def _outcomes_apart(

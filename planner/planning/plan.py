@@ -36,6 +36,7 @@ from planner.planning.forecast import (
     with_forecast,
 )
 from planner.planning.planned import planned
+from planner.planning.pose_spread import recentred, spreads
 from planner.planning.probes import opening_probe
 from planner.planning.refining_paths import one_class_paths, refining_paths
 from planner.planning.representatives import (
@@ -81,7 +82,8 @@ def plan_session(
 ) -> Plan:
     """:func:`plan` on a session's state, its first
     `config.forecast` paths forecast within the same budget."""
-    with predictions():  # one update per distinct predicted observation
+    # one update per distinct predicted observation, one spread per hypothesis
+    with predictions(), spreads():
         return _plan_session(session, sensor_position, config or StrategyConfig(), rng)
 
 
@@ -105,7 +107,7 @@ def _plan_session(
     )
     sample = weighted_sample(reps, face_counts(reps, by_name))
     result = plan(
-        sample,
+        recentred(session, sample),
         session.models,
         session.working_sensor,
         session.workspace,

@@ -258,11 +258,15 @@ def test_the_recognition_refines_where_the_outcome_model_is_unsure(monkeypatch):
     recognition predicts (before, the plan was empty and the robot stopped).
     Observing the first path's predicted contact gives the predicted bound, within
     the accuracy."""
+    from planner.planning import pose_spread
     from planner.planning import refinement as refine_module
     from planner.planning.analysis import models_by_name
     from planner.planning.plan import plan_session
 
     monkeypatch.setattr(refine_module, "SMOOTH_TURN", 0.0)
+    # the plan works on the fitted pose (moved where the contacts allow it, the
+    # stadium's disk would change and, with it, what the outcome model is sure of)
+    monkeypatch.setattr(pose_spread, "SPREAD_FROM", math.inf)
     session = _stadium_touched_twice()
     where = session.localization
     assert where.classes == 1 and where.missing == ("accuracy",)
@@ -302,13 +306,10 @@ def _normal_at(ring, point):
     return tuple(n if ring.is_ccw else -n)
 
 
-def test_a_class_whose_predicted_contacts_contradict_its_contacts_still_gets_a_path():
+def _stadium_sliding() -> Session:
     """A world of the shared curved set (the stadium, 1 mm / 0.05 rad, trial 32 of
     a simulated run) touched three times: one class that can still slide 89 mm,
-    whose nominal pose (a fit) lies 3-7 mm off its contacts, so every contact the
-    recognition would predict there contradicts them. The plan offers the paths
-    whose contact would pin the pose most instead of none (the robot had stopped)."""
-    from planner.planning.plan import plan_session
+    whose fitted pose lies 3-7 mm off its contacts."""
     from planner.types import Workspace
     from tests.conftest import object_set
 
@@ -327,8 +328,34 @@ def test_a_class_whose_predicted_contacts_contradict_its_contacts_still_gets_a_p
     ]:  # fmt: skip
         path = SensingPath(origin, direction, 400.0)
         session = session.observe(Observation(path, Contact(point, normal)))
+    return session
+
+
+def test_a_class_whose_fit_contradicts_its_contacts_is_refined_where_it_may_lie():
+    """The scene above: the plan works on the class' pose nearest the middle of
+    those its contacts allow (:mod:`planner.planning.pose_spread`), so the contacts
+    the recognition predicts there agree with the ones made, and it ranks the
+    refining paths on them."""
+    from planner.planning.plan import plan_session
+
+    session = _stadium_sliding()
     where = session.localization
     assert where.classes == 1 and where.missing == ("accuracy",)
+    found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
+    assert found.paths and found.paths[0].family == REFINING
+    assert "refining the pose on the recognition's predictions" in (found.note or "")
+
+
+def test_a_class_whose_predicted_contacts_contradict_its_contacts_still_gets_a_path(monkeypatch):
+    """The scene above with the plan on the fitted pose itself: every contact the
+    recognition would predict there contradicts the contacts made. The plan
+    offers the paths whose contact would pin the pose most instead of none (the
+    robot had stopped)."""
+    from planner.planning import pose_spread
+    from planner.planning.plan import plan_session
+
+    monkeypatch.setattr(pose_spread, "SPREAD_FROM", math.inf)
+    session = _stadium_sliding()
     found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
     assert found.paths and found.paths[0].family == REFINING
     assert "pin the pose most" in (found.note or "")
