@@ -13,7 +13,10 @@ contacts.
 The forecast asks the recognition. Each class' most probable member predicts
 its nominal outcome on the path (the first hit, with the posed face normal,
 or a miss); the session observes that outcome; the touch is distinguishing
-when one class is left. ``p_forecast = sum_k w(k) [one class left | k's
+when one class is left. A class pinned poorly (a part free to slide along two
+nearly parallel faces) predicts at the pose its touches still allow, and its
+prediction counts for the share of its possible poses that agree with it
+(:mod:`planner.planning.pose_spread`). ``p_forecast = sum_k w(k) [one class left | k's
 outcome]``, the class weights being the session's probabilities. One
 recognition update per class, so it is offered for the first few ranked
 paths only, and only when the plan's budget can pay for every class: a
@@ -40,7 +43,7 @@ from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
 from planner.planning.candidates import Candidates
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
-from planner.planning.pose_spread import agreement
+from planner.planning.pose_spread import agreement, recentred
 from planner.planning.posed_set import PosedSet, pose_hypotheses
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
@@ -82,23 +85,21 @@ def forecast_distinguishing(
     if not budget.affords_updates(len(first), size):
         return None  # it would stop before the last class: not even started
     # the ball tip's centre is what the session observes: cast the grown outlines
+    # (a poorly pinned class at the pose its touches still allow, as the plan sees it)
     models = grown_models(session.models_by_name, session.sensor.tip_radius)
-    posed = pose_hypotheses(hypotheses, models, path.height)
-    out = predict_outcomes(
-        posed,
-        np.array([path.origin]),
-        np.array([path.direction]),
-        np.array([path.length]),
-        session.working_sensor,
-        config or OutcomeConfig(),
-    )
-    for k, row in zip(cls[first], first, strict=True):
+    posed = pose_hypotheses(recentred(session, hypotheses), models, path.height)
+    line = np.array([path.origin]), np.array([path.direction]), np.array([path.length])
+    out = predict_outcomes(posed, *line, session.working_sensor, config or OutcomeConfig())
+    trust = np.ones(len(first))  # the share of each class' poses its prediction holds for
+    if path.height is None:
+        trust = agreement(session, [hypotheses[r] for r in first], out.hit[:, first], *line)[0]
+    for k, row, share in zip(cls[first], first, trust, strict=True):
         if budget.exhausted():
             return None
         after = _observed(session, path, out, 0, int(row))
         budget.spend_updates(1, size)
         if after is not None and len({h.equivalence_class for h in after.hypotheses}) == 1:
-            total += float(weight[k])
+            total += float(weight[k]) * share
     return min(total / float(weight.sum()), 1.0)
 
 
