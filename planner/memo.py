@@ -8,7 +8,8 @@ both compute it, which is harmless for the pure computations it caches.
 
 :class:`SharedCache` keeps what sessions on the same parts would each compute
 again (a robot cell works on one library): keyed by the parts' numbers, the least
-recently used dropped past a bound on the values' total size.
+recently used dropped past a bound on the values' total size. :class:`ScopedMemo`
+keeps what one plan would compute twice, for the length of that plan only.
 
 >>> cache = SharedCache(limit=5, size=len)
 >>> cache.get("ab", lambda: "xy"), cache.get("ab", lambda: "other")
@@ -24,12 +25,14 @@ from __future__ import annotations
 import hashlib
 import threading
 from collections import OrderedDict
-from collections.abc import Callable, Hashable, Iterable
+from collections.abc import Callable, Hashable, Iterable, Iterator
+from contextlib import contextmanager
+from contextvars import ContextVar
 from typing import Any, Generic, TypeVar, overload
 
 import numpy as np
 
-__all__ = ["SharedCache", "array_key", "cached_property"]
+__all__ = ["ScopedMemo", "SharedCache", "array_key", "cached_property"]
 
 T = TypeVar("T")
 
@@ -53,6 +56,36 @@ class cached_property(Generic[T]):  # noqa: N801 - named after the functools ori
         value = self.func(instance)
         instance.__dict__[self.attrname] = value  # type: ignore[index]
         return value
+
+
+class ScopedMemo:
+    """A dict that exists within :meth:`scope` (one plan, in its own thread or
+    task) and is None outside it, so that nothing it holds outlives the plan.
+
+    >>> memo = ScopedMemo("example")
+    >>> memo.get() is None
+    True
+    >>> with memo.scope():
+    ...     memo.get()["a"] = 1
+    ...     memo.get()
+    {'a': 1}
+    >>> memo.get() is None
+    True
+    """
+
+    def __init__(self, name: str) -> None:
+        self._var: ContextVar[dict | None] = ContextVar(name, default=None)
+
+    def get(self) -> dict | None:
+        return self._var.get()
+
+    @contextmanager
+    def scope(self) -> Iterator[None]:
+        token = self._var.set({})
+        try:
+            yield
+        finally:
+            self._var.reset(token)
 
 
 class SharedCache(Generic[T]):

@@ -29,15 +29,15 @@ from __future__ import annotations
 
 import dataclasses
 import time
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
-from contextvars import ContextVar
+from collections.abc import Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 
 import numpy as np
 
 from planner.errors import InvalidObservationError
 from planner.geometry import LENGTH_SLACK
+from planner.memo import ScopedMemo
 from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
@@ -339,17 +339,12 @@ def update_size(session: Session) -> float:
 #: hypotheses of equal pose (twins told apart elsewhere; classes that all miss)
 #: predict the same observation, and one update serves them all. Set by
 #: :func:`predictions` for the length of a plan, so nothing outlives it.
-_PREDICTED: ContextVar[dict | None] = ContextVar("predicted", default=None)
+_PREDICTED = ScopedMemo("predicted")
 
 
-@contextmanager
-def predictions() -> Iterator[None]:
+def predictions() -> AbstractContextManager[None]:
     """Within it, a predicted observation is observed once (:func:`_observed`)."""
-    token = _PREDICTED.set({})
-    try:
-        yield
-    finally:
-        _PREDICTED.reset(token)
+    return _PREDICTED.scope()
 
 
 def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> Session | None:

@@ -26,13 +26,13 @@ World frame, lengths in the object files' unit.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
-from contextvars import ContextVar
+from collections.abc import Sequence
+from contextlib import AbstractContextManager
 
 import numpy as np
 
 from planner.geometry import LENGTH_SLACK, wrap_angle
+from planner.memo import ScopedMemo
 from planner.models.tip import grown_models
 from planner.planning.outcomes import predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
@@ -57,17 +57,12 @@ SPREAD_FROM = 5.0
 SPREAD_ROTATIONS = 4
 
 #: The spread poses of the hypotheses met during one plan (see :func:`spreads`).
-_SPREADS: ContextVar[dict | None] = ContextVar("spreads", default=None)
+_SPREADS = ScopedMemo("spreads")
 
 
-@contextmanager
-def spreads() -> Iterator[None]:
+def spreads() -> AbstractContextManager[None]:
     """Within it, each hypothesis' poses are spread once (:func:`admitted_poses`)."""
-    token = _SPREADS.set({})
-    try:
-        yield
-    finally:
-        _SPREADS.reset(token)
+    return _SPREADS.scope()
 
 
 def _wide(session: Session, hypothesis: Hypothesis) -> bool:
