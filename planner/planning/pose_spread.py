@@ -42,6 +42,8 @@ from planner.recognition.session import Session
 from planner.types import ErrorBound, Hypothesis, Pose
 
 __all__ = [
+    "POSES_EACH",
+    "SPREAD_FACES",
     "SPREAD_FROM",
     "SPREAD_ROTATIONS",
     "admitted_poses",
@@ -55,6 +57,12 @@ SPREAD_FROM = 5.0
 #: Rotations across the interval the normals allow at which poses are spread
 #: (eight poses each, convex mixtures of the consistent polygon's corners).
 SPREAD_ROTATIONS = 4
+
+#: Poses spread per hypothesis, its fit included.
+POSES_EACH = 8 * SPREAD_ROTATIONS + 1
+#: Posed faces (poses x faces each) a plan spreads at most: past them, the less
+#: probable wide hypotheses are planned at their fits.
+SPREAD_FACES = 60_000
 
 #: The spread poses of the hypotheses met during one plan (see :func:`spreads`).
 _SPREADS = ScopedMemo("spreads")
@@ -167,15 +175,21 @@ def _posed(session: Session, hypotheses: Sequence[Hypothesis], theta: np.ndarray
 
 
 def recentred(session: Session, hypotheses: Sequence[Hypothesis]) -> list[Hypothesis]:
-    """`hypotheses` with each wide one whose fit is no longer possible (a contact
-    off its finite face, a missed path through its outline) planned at its
-    admitted pose nearest their mean, its bound widened by the move (translation
-    by the shift, rotation by the turn, the error disk by twice the farthest
-    displacement of its outline): every pose the old bound allowed lies within
-    the new one."""
+    """`hypotheses` with each wide one (the most probable, up to `SPREAD_FACES`
+    posed faces) whose fit is no longer possible (a contact off its finite face,
+    a missed path through its outline) planned at its admitted pose nearest
+    their mean, its bound widened by the move (translation by the shift,
+    rotation by the turn, the error disk by twice the farthest displacement of
+    its outline): every pose the old bound allowed lies within the new one."""
     out = list(hypotheses)
     by_name = session.models_by_name
-    wide = [k for k, h in enumerate(hypotheses) if _wide(session, h)]
+    wide, faces = [], 0
+    for k, h in enumerate(hypotheses):  # the most probable first, within SPREAD_FACES
+        if _wide(session, h):
+            faces += POSES_EACH * len(by_name[h.object].stable_poses[h.stable_pose].all_faces)
+            if faces > SPREAD_FACES:
+                break
+            wide.append(k)
     admitted = _admitted_all(session, [hypotheses[k] for k in wide])
     for k, (theta, t) in zip(wide, admitted, strict=True):
         h = hypotheses[k]

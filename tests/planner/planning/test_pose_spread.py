@@ -14,6 +14,7 @@ import numpy as np
 
 from hardware_sim.world import World
 from planner.models.library import object_from_dict
+from planner.planning import pose_spread
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
 from planner.planning.pose_spread import admitted_poses, agreement, recentred
@@ -83,6 +84,17 @@ def test_the_fit_of_a_poorly_pinned_part_is_moved_where_it_may_lie():
             BOUNDS.position_error + 1e-6,
         )
         assert on.tolist() == [[True, False]]
+
+
+def test_the_poses_spread_are_bounded_in_advance(monkeypatch):
+    session = touched()
+    faces = len(SLIVER.stable_poses[0].all_faces)
+    monkeypatch.setattr(pose_spread, "SPREAD_FACES", pose_spread.POSES_EACH * faces)
+    moved = recentred(session, session.hypotheses)
+    assert moved[0] != session.hypotheses[0]  # the most probable is spread
+    assert moved[1:] == list(session.hypotheses[1:])  # the budget ends before the next
+    monkeypatch.setattr(pose_spread, "SPREAD_FACES", 0)
+    assert recentred(session, session.hypotheses) == list(session.hypotheses)
 
 
 def test_a_prediction_counts_only_where_the_part_may_lie():
