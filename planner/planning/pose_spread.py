@@ -232,13 +232,20 @@ def agreement(
     share = np.ones(planned_hit.shape)
     if not len(origins):
         return share
-    for k, h in enumerate(hypotheses):
-        if not _wide(session, h):
-            continue
-        theta, t = admitted_poses(session, h)
-        if len(theta) < 2:
-            continue
-        posed = _posed(session, [h] * len(theta), theta, t)
-        hit = predict_outcomes(posed, origins, directions, lengths, session.working_sensor).hit
-        share[:, k] = (hit == planned_hit[:, k : k + 1]).mean(axis=1)
+    wide = [k for k, h in enumerate(hypotheses) if _wide(session, h)]
+    spread = dict(zip(wide, _admitted_all(session, [hypotheses[k] for k in wide]), strict=True))
+    spread = {k: poses for k, poses in spread.items() if len(poses[0]) >= 2}
+    if not spread:
+        return share
+    # every class' poses in one cast
+    owner = np.concatenate([np.full(len(theta), k) for k, (theta, _) in spread.items()])
+    posed = _posed(
+        session,
+        [hypotheses[k] for k in owner],
+        np.concatenate([theta for theta, _ in spread.values()]),
+        np.vstack([t for _, t in spread.values()]),
+    )
+    hit = predict_outcomes(posed, origins, directions, lengths, session.working_sensor).hit
+    for k in spread:
+        share[:, k] = (hit[:, owner == k] == planned_hit[:, k : k + 1]).mean(axis=1)
     return share
