@@ -126,6 +126,12 @@ class RecognitionService(Protocol):
         """Current hypotheses, most probable first."""
         ...
 
+    def answer_bound(self) -> float | None:
+        """The diameter of the error disk the session reports with its answer: the
+        most probable class' bound (``localization.bound.eps_t``), which covers
+        every member's and, for a class of one, is its own; None without one."""
+        ...
+
 
 class InProcessService:
     """:class:`RecognitionService` calling the planner library in this process.
@@ -182,6 +188,10 @@ class InProcessService:
         hyps = self.session.hypotheses
         return Update(self.session.status, len(hyps), len({h.equivalence_class for h in hyps}))
 
+    def answer_bound(self) -> float | None:
+        bound = self.session.localization.bound
+        return None if bound is None else float(bound.eps_t)
+
     def estimates(self, limit: int | None = None) -> list[Estimate]:
         hyps = self.session.hypotheses[:limit]
         return [
@@ -221,11 +231,14 @@ class Step:
 class Recognition:
     """A whole recognition: final `status` (localized, inconsistent, ambiguous
     when stopped by the touch limit, stuck when no informative path was left),
-    the `steps`, and the final `estimates` (most probable first)."""
+    the `steps`, the final `estimates` (most probable first), and `bound`, the
+    diameter of the error disk the session reports with its answer (the most
+    probable class' bound, :meth:`RecognitionService.answer_bound`)."""
 
     status: str
     steps: tuple[Step, ...]
     estimates: tuple[Estimate, ...]
+    bound: float | None = None
 
     @property
     def touches(self) -> int:
@@ -270,7 +283,9 @@ def run_recognition(
         status = update.status
         if status in DONE:
             break
-    return Recognition(status, tuple(steps), tuple(service.estimates(limit=None)))
+    return Recognition(
+        status, tuple(steps), tuple(service.estimates(limit=None)), service.answer_bound()
+    )
 
 
 def outline_distance(

@@ -55,8 +55,9 @@ class ExperimentSpec:
     object (None: drawn by the objects' priors); `preset` the hardware (its
     bounds configure the planner); `workspace` the safe circle; `strategy`
     extra :class:`StrategyConfig` fields shared by all strategies (e.g.
-    ``{"budget_ms": None, "budget_work": None}``); `pose_slack` (length) added to the hypothesis'
-    error bound when judging the pose; `trial_timeout` (s of wall time, None: no
+    ``{"budget_ms": None, "budget_work": None}``); `pose_slack` (length) added to the error
+    bound the session answers with (its most probable class', which covers every member's)
+    when judging the pose; `trial_timeout` (s of wall time, None: no
     limit) ends a trial as status ``timeout`` (unlocalized, no steps kept).
     `prior_radius` (length) and `prior_theta` (radians, half-width) give each trial
     a pose prior drawn around its world, the truth uniform inside it
@@ -199,7 +200,9 @@ def run_trial(spec: ExperimentSpec, strategy: str, trial: int) -> TrialResult:
     if rec.status == "localized" and rec.estimates:
         best = rec.estimates[0]
         error = outline_distance(models, best, world.model.name, world.pose_index, world.pose)
-        success = error <= best.eps_t / 2 + spec.pose_slack
+        # the bound the session answers with: its class', which covers every member's
+        reported = best.eps_t if rec.bound is None else rec.bound
+        success = error <= reported / 2 + spec.pose_slack
     return TrialResult(
         strategy=strategy,
         trial=trial,

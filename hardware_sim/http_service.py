@@ -339,6 +339,16 @@ class HttpService:
         self.status = state.status.value
         return Update(self.status, state.hypothesis_count, state.class_count)
 
+    def answer_bound(self) -> float | None:
+        """``GET /v1/sessions/{id}``: the bound of its ``localization``."""
+        state: SessionOut = self._send(
+            "GET /v1/sessions/{id}",
+            lambda: get_session.sync_detailed(self.session_id, client=self.client, limit=1),
+            200,
+        )
+        bound = state.localization.bound
+        return None if bound is None else float(bound.eps_t)
+
     def estimates(self, limit: int | None = None) -> list[Estimate]:
         """``GET /v1/sessions/{id}``: the hypotheses, most probable first."""
         state: SessionOut = self._send(

@@ -72,6 +72,9 @@ class _Service:
     def estimates(self, limit=None):
         return [Estimate("sq", 0, Pose(0, 0, 0), 0.0, 1.0, 0)]
 
+    def answer_bound(self):
+        return None
+
 
 class _MissingProbe:
     position = (100.0, 0.0)
@@ -265,3 +268,31 @@ def test_a_distinguishing_touch_leaves_one_class_whatever_the_accuracy(update, d
     `localized` instead."""
     step = Step(advice=None, observation=None, update=update, distance=0.0, time=0.0)
     assert step.distinguishing is dm
+
+
+def test_a_pose_is_judged_against_the_bound_the_session_answers_with(monkeypatch):
+    """A bar tapered by 1.4 degrees turned half round lies within the symmetry
+    tolerance of itself: both turns are one class, and the session answers with
+    the class' bound, which covers both. In this world the less likely turn is the
+    truth: its outline lies outside the leader's own disk but inside the class'.
+    Judged against the leader's own bound (as before) it counted as wrong."""
+    from hardware_sim import client
+    from hardware_sim.experiments import ExperimentSpec, run_trial
+    from hardware_sim.presets import explicit_preset
+    from planner.models.library import object_from_dict
+
+    bar = object_from_dict(
+        {"name": "bar", "outline": [[-23.86, -7.0], [23.86, -5.83], [23.86, 5.83], [-23.86, 7.0]]}
+    )
+    spec = ExperimentSpec(
+        models=(bar,),
+        strategies=("lookahead",),
+        trials=68,
+        preset=explicit_preset(1.0, 0.05, 0.0),
+        strategy={"budget_ms": None},
+    )
+    answered = run_trial(spec, "lookahead", 67)
+    assert answered.status == "localized" and answered.success
+    monkeypatch.setattr(client.InProcessService, "answer_bound", lambda self: None)
+    own = run_trial(spec, "lookahead", 67)
+    assert own.pose_error == answered.pose_error and not own.success
