@@ -26,6 +26,7 @@ World frame, lengths in the object files' unit.
 from __future__ import annotations
 
 import dataclasses
+import functools
 from collections.abc import Sequence
 from contextlib import AbstractContextManager
 
@@ -55,11 +56,11 @@ __all__ = [
 #: Translation bound, in position bounds, above which a hypothesis' poses are spread.
 SPREAD_FROM = 5.0
 #: Rotations across the interval the normals allow at which poses are spread
-#: (eight poses each, convex mixtures of the consistent polygon's corners).
+#: (the consistent polygon's corners, its mean, and points between: :func:`_corners`).
 SPREAD_ROTATIONS = 4
 
-#: Poses spread per hypothesis, its fit included.
-POSES_EACH = 8 * SPREAD_ROTATIONS + 1
+#: Most poses spread per hypothesis, its fit included.
+POSES_EACH = 64
 #: Posed faces (poses x faces each) a plan spreads at most: past them, the less
 #: probable wide hypotheses are planned at their fits.
 SPREAD_FACES = 60_000
@@ -152,7 +153,7 @@ def _spread_group(
     fit_theta = np.array([h.pose.theta for h in rows])
     theta, t, valid = consistent_poses(
         points, normals, faces.normal[face], faces.offset[face], assigned, fit_theta, eps_d, phi,
-        rotations=SPREAD_ROTATIONS,
+        rotations=SPREAD_ROTATIONS, mixing=_corners,
     )  # fmt: skip
     # the fit first; a row whose set is unbounded (a slide) is not spread
     theta = np.hstack([fit_theta[:, None], theta])
@@ -160,7 +161,25 @@ def _spread_group(
     valid = np.hstack([valid.any(axis=1, keepdims=True), valid])
     slack = eps_d + LENGTH_SLACK * session.length_scale
     valid &= contacts_on_faces(points, faces, face, assigned, theta, t, slack)
-    return [(theta[k][valid[k]], t[k][valid[k]]) for k in range(len(rows))]
+    out = []
+    for k in range(len(rows)):
+        keep = np.flatnonzero(valid[k])
+        if len(keep) > POSES_EACH:  # evenly thinned, the fit (column 0) kept when valid
+            keep = keep[np.linspace(0, len(keep) - 1, POSES_EACH).round().astype(int)]
+        out.append((theta[k][keep], t[k][keep]))
+    return out
+
+
+@functools.lru_cache(maxsize=64)
+def _corners(vertices: int) -> np.ndarray:
+    """Mixing weights over a consistent polygon's candidate vertices (renormalized
+    over its true vertices, n of them): each vertex, its mean, and the points
+    about a third and two thirds of the way from the mean to each vertex
+    (``(2 e_v + 1) / (2 + n)``, ``(6 e_v + 1) / (6 + n)``): a slide's polygon is
+    long and thin, and its ends are where a part touched on two nearly parallel
+    faces may lie as well as its middle."""
+    eye = np.eye(vertices)
+    return np.vstack([eye, 6 * eye + 1, 2 * eye + 1, np.ones((1, vertices))])
 
 
 def _posed(session: Session, hypotheses: Sequence[Hypothesis], theta: np.ndarray, t: np.ndarray):  # type: ignore[no-untyped-def]
@@ -194,7 +213,7 @@ def recentred(session: Session, hypotheses: Sequence[Hypothesis]) -> list[Hypoth
     for k, (theta, t) in zip(wide, admitted, strict=True):
         h = hypotheses[k]
         fit_kept = len(theta) and theta[0] == h.pose.theta and (t[0] == (h.pose.x, h.pose.y)).all()
-        if len(theta) < 2 or fit_kept:
+        if not len(theta) or fit_kept:
             continue  # the fit itself is still possible: planned as it is
         stable = by_name[h.object].stable_poses[h.stable_pose]
         lever = float(np.hypot(*np.asarray(stable.outline, dtype=float).T).max())

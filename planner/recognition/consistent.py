@@ -15,6 +15,7 @@ from __future__ import annotations
 
 import functools
 import math
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numba
@@ -325,13 +326,17 @@ def consistent_poses(
     phi: float,
     rotations: int = 4,
     max_faces: int = MAX_FACES,
+    mixing: Callable[[int], np.ndarray] | None = None,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Poses spread over the set consistent with the contacts, per row: at
     `rotations` rotations across the interval the normals allow (cell midpoints),
     fixed convex mixtures of the polygon's vertices (inside it, the polygon
-    being convex). Returns theta' (K, M), t' (K, M, 2) and `valid` (K, M) (False
-    where the polygon is empty or unbounded). Only the contacts on the
-    `max_faces` faces touched last count (:func:`latest_faces`): the poses spread
+    being convex): `mixing(V)` (S, V) non-negative weights over the V candidate
+    vertices, renormalized over those that are vertices (default: eight
+    Dirichlet draws, which gather near the polygon's middle). Returns theta'
+    (K, M), t' (K, M, 2) and `valid` (K, M) (False where the polygon is empty or
+    unbounded). Only the contacts on the `max_faces` faces touched last count
+    (:func:`latest_faces`): the poses spread
     over a superset of the consistent set."""
     K, s = assigned.shape
     points = np.broadcast_to(points, (K, s, 2))
@@ -344,7 +349,7 @@ def consistent_poses(
         points, face_normals, face_offsets, assigned, theta, d_theta, eps_d
     )
     V = vx.shape[-1]
-    mix = _mix(V)[None, None] * ok[:, :, None, :]  # (K, N, S, V)
+    mix = (mixing or _mix)(V)[None, None] * ok[:, :, None, :]  # (K, N, S, V)
     total = mix.sum(axis=-1)
     mix = mix / np.where(total > 0, total, 1.0)[..., None]
     tx = np.einsum("knsv,knv->kns", mix, np.where(ok, vx, 0.0))
