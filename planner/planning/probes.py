@@ -105,11 +105,14 @@ def search_chord(
     Prior: the object (by its prior), stable pose (by its probability), orientation
     uniform, position uniform among those keeping it inside the safe circle, as
     `samples` fixed draws. A draw that one of the `missed` paths would have met is
-    ruled out. A chord (normal angle a, offset rho from the centre) meets a draw's
-    outline exactly when rho lies strictly between the outline's least and greatest
-    projection on the normal; the chord meeting the most surviving draws wins
-    (ties: the least motion from the sensor's place). With no draw left (the prior
-    was wrong), chords through the centre turn by the golden angle per miss.
+    ruled out; while fewer than a quarter of `samples` survive, a further fixed
+    batch is drawn (up to `SEARCH_BATCHES`), so that after many misses the chord
+    is not chosen on a handful of draws. A chord (normal angle a, offset rho from
+    the centre) meets a draw's outline exactly when rho lies strictly between the
+    outline's least and greatest projection on the normal; the chord meeting the
+    most surviving draws wins (ties: the least motion from the sensor's place).
+    With no draw left (the prior was wrong), chords through the centre turn by the
+    golden angle per miss.
     Returns the path (origin on the circle, through to the far side) and its midpoint.
 
     >>> from planner.models.library import object_from_dict
@@ -171,18 +174,25 @@ def _prior_extents(
     a = np.array([p.origin for p in missed], dtype=float).reshape(-1, 2)  # (M, 2) a -> b
     b = a + np.array([np.multiply(p.length, p.direction) for p in missed]).reshape(-1, 2)
     lo, hi = [], []
-    for draws in _prior_draws(models, workspace, samples, normal):
-        theta, t = draws.theta, draws.t
-        met = np.zeros(len(theta), dtype=bool)
-        for start, end in zip(a, b, strict=True):
-            # only a path passing within the farthest vertex's reach of the origin can meet
-            near = np.flatnonzero(point_segment_distance(t, start, end) <= draws.radius)
-            ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
-            # world offsets into the object's frame
-            local = rotate(rotation_matrices(-theta[near]), ends).reshape(-1, 4)
-            met[near] |= segments_meet(local, draws.edges)
-        lo.append(draws.lo[~met])
-        hi.append(draws.hi[~met])
+    alive = 0
+    # after many misses few draws survive and the chord chosen on them is a guess:
+    # further fixed batches are drawn until a quarter of one batch survives
+    for batch in range(SEARCH_BATCHES):
+        if batch and alive >= samples // 4:
+            break
+        for draws in _prior_draws(models, workspace, samples, normal, batch):
+            theta, t = draws.theta, draws.t
+            met = np.zeros(len(theta), dtype=bool)
+            for start, end in zip(a, b, strict=True):
+                # only a path passing within the farthest vertex's reach of the origin can meet
+                near = np.flatnonzero(point_segment_distance(t, start, end) <= draws.radius)
+                ends = np.stack([start - t[near], end - t[near]], axis=1)  # (k, 2, 2)
+                # world offsets into the object's frame
+                local = rotate(rotation_matrices(-theta[near]), ends).reshape(-1, 4)
+                met[near] |= segments_meet(local, draws.edges)
+            lo.append(draws.lo[~met])
+            hi.append(draws.hi[~met])
+            alive += int((~met).sum())
     return np.concatenate(lo), np.concatenate(hi)
 
 
@@ -229,7 +239,10 @@ class _Draws:
     hi: np.ndarray
 
 
-#: Prior draws per (objects' numbers, safe circle, count, normals), for the process:
+#: Most batches of prior draws the search after misses judges its chords on.
+SEARCH_BATCHES = 8
+
+#: Prior draws per (objects' numbers, safe circle, count, batch, normals), for the process:
 #: every session on the same parts makes the same fixed draws (a service rebuilds
 #: the parts per session, so their identities would never match). A few numbers
 #: per draw and normal, whatever the outline; bounded by their total (4 million
@@ -241,20 +254,25 @@ _DRAWS: SharedCache[list[_Draws]] = SharedCache(
 
 
 def _prior_draws(
-    models: Mapping[str, ObjectModel], workspace: Workspace, samples: int, normal: np.ndarray
+    models: Mapping[str, ObjectModel],
+    workspace: Workspace,
+    samples: int,
+    normal: np.ndarray,
+    batch: int = 0,
 ) -> list[_Draws]:
-    """`samples` fixed draws of the pose from the prior, grouped by stable pose, with
-    their extents on each `normal` (A, 2) (the convex hull's support function)."""
+    """`samples` fixed draws of the pose from the prior (the `batch`-th such set),
+    grouped by stable pose, with their extents on each `normal` (A, 2) (the convex
+    hull's support function)."""
     items = list(models.values())
     weights = [[1.0 if m.prior is None else m.prior] for m in items]
     weights += [[p.probability for p in m.stable_poses] for m in items]
     outlines = [p.outline for m in items for p in m.stable_poses]
     counts = [len(items), *(len(m.stable_poses) for m in items)]
-    where = [[*workspace.center, workspace.radius, samples], counts, normal]
+    where = [[*workspace.center, workspace.radius, samples, batch], counts, normal]
     key = array_key([*map(np.asarray, where + weights), *outlines])
 
     def draw() -> list[_Draws]:
-        rng = np.random.default_rng(0)  # fixed draws: the plan is a function of its inputs
+        rng = np.random.default_rng(batch)  # fixed draws: the plan is a function of its inputs
         drawn = Counter(draw_stable_poses(items, samples, rng))
         centre = np.asarray(workspace.center, dtype=float)
         alpha = np.arctan2(normal[:, 1], normal[:, 0])  # (A,)

@@ -12,6 +12,7 @@ from hypothesis import strategies as st
 from planner.geometry import rotate, rotation_matrices, segment_segment_distance
 from planner.models.library import object_from_dict
 from planner.planning.probes import (
+    SEARCH_BATCHES,
     _prior_draws,
     _prior_extents,
     _support,
@@ -74,6 +75,38 @@ def test_extents_are_those_of_every_posed_draw_no_missed_path_meets():
     assert len(lo) == sum(len(x) for x in want_lo) < 512  # some draws were ruled out
     assert np.allclose(lo, np.concatenate(want_lo), atol=1e-9)
     assert np.allclose(hi, np.concatenate(want_hi), atol=1e-9)
+
+
+def _survivors(models, missed, normal, samples, batch):
+    """Extents of the draws of one batch that no missed path comes near, by posing them."""
+    draws = _prior_draws(models, WORKSPACE, samples, normal, batch)[0]
+    stable, theta, t = models["ell"].stable_poses[0], draws.theta, draws.t
+    posed = rotate(rotation_matrices(theta), stable.outline) + t[:, None]
+    start, end = posed, np.roll(posed, -1, axis=1)
+    met = np.zeros(len(theta), dtype=bool)
+    for p in missed:
+        a = np.array(p.origin)
+        b = a + p.length * np.array(p.direction)
+        met |= (segment_segment_distance(start, end, a, b) < 1e-9).any(axis=1)
+    proj = (posed[~met] - np.array(WORKSPACE.center)) @ normal.T
+    return proj.min(axis=1), proj.max(axis=1)
+
+
+def test_after_many_misses_the_search_draws_again_until_enough_survive():
+    # seven parallel misses 40 apart leave few of one batch's draws: the chord would
+    # be chosen on a handful; further fixed batches are drawn until a quarter survives
+    models = {"ell": object_from_dict({"name": "ell", "outline": ELL})}
+    cx, cy = WORKSPACE.center
+    missed = [
+        SensingPath((cx - 150.0, cy + y), (1.0, 0.0), 300.0) for y in np.arange(-120, 121, 40)
+    ]
+    lo, hi = _prior_extents(models, WORKSPACE, missed, NORMAL, 256)
+    want = []
+    while sum(len(w[0]) for w in want) < 256 // 4:
+        want.append(_survivors(models, missed, NORMAL, 256, len(want)))
+    assert 1 < len(want) <= SEARCH_BATCHES and len(want[0][0]) < 256 // 4
+    assert np.allclose(lo, np.concatenate([w[0] for w in want]), atol=1e-9)
+    assert np.allclose(hi, np.concatenate([w[1] for w in want]), atol=1e-9)
 
 
 def test_sessions_on_rebuilt_parts_share_the_prior_draws():
