@@ -64,6 +64,9 @@ def test_http_loop_makes_the_same_touches_as_the_in_process_loop(client, seed):
     assert [s.advice.p_distinguishing for s in b.steps] == pytest.approx(
         [s.advice.p_distinguishing for s in a.steps]
     )
+    # the bound each answers with (its most probable class')
+    assert (b.bound is None) == (a.bound is None)
+    assert b.bound is None or b.bound == pytest.approx(a.bound, abs=1e-9)
     assert len(b.estimates) == len(a.estimates)
     for x, y in zip(a.estimates, b.estimates, strict=True):
         assert (y.object, y.stable_pose, y.equivalence_class) == (
