@@ -56,6 +56,7 @@ __all__ = [
     "RecognitionRanking",
     "RefiningPrediction",
     "forecast_distinguishing",
+    "outcomes_apart",
     "predictions",
     "recognition_ranking",
     "recognition_refining",
@@ -219,7 +220,7 @@ def recognition_ranking(
     # then the likeliest splits first by the screen
     feature = np.flatnonzero(cands.source == "feature")
     other = np.flatnonzero(cands.source != "feature")
-    apart = _outcomes_apart(out, other, best, session.working_sensor)
+    apart = outcomes_apart(out, other, best, session.working_sensor)
     order = np.lexsort((found.motion[other], -found.info.p_informative[other], -apart))
     other, apart = other[order], apart[order]
     # past the first `SHORTLIST`, only paths where the outcomes lie over a bound apart
@@ -301,7 +302,7 @@ def _trusted(
     return trust
 
 
-def _outcomes_apart(
+def outcomes_apart(
     out: Outcomes, rows: np.ndarray, members: np.ndarray, sensor: SensorBounds
 ) -> np.ndarray:
     """(n,) for each candidate of `rows`, how far apart the nominal outcomes of the

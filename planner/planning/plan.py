@@ -38,7 +38,7 @@ from planner.planning.forecast import (
 from planner.planning.planned import planned
 from planner.planning.pose_spread import recentred, spreads
 from planner.planning.probes import opening_probe
-from planner.planning.refining_paths import one_class_paths, refining_paths
+from planner.planning.refining_paths import apart_paths, one_class_paths, refining_paths
 from planner.planning.representatives import (
     SAMPLE_FACES,
     face_counts,
@@ -301,6 +301,8 @@ def _uninformative(
             found, hypotheses, models, contacts, sensor, ranking, config
         )
         note = refined if paths else note
+    if not paths:
+        paths, note = apart_paths(found, sensor, ranking, config, note)
     return paths, note
 
 

@@ -8,6 +8,11 @@ is weak (leaves more than `WEAK_REFINEMENT` of the disk, or finds nothing), the
 recognition's own predictions judge a shortlist
 (:func:`~planner.planning.forecast.recognition_refining`), and the smaller
 predicted disk wins.
+
+Where several classes are left and neither the outcome model, the recognition's
+predictions nor refining finds a path (near twins whose outlines differ by about
+the error bounds), :func:`apart_paths` offers the paths where the classes'
+nominal outcomes lie farthest apart.
 """
 
 from __future__ import annotations
@@ -21,7 +26,11 @@ import numpy as np
 from planner.planning.analysis import Analysis, models_by_name
 from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import recognition_refining
+from planner.planning.forecast import (
+    SHORTLIST_CLASSES_ALONE,
+    outcomes_apart,
+    recognition_refining,
+)
 from planner.planning.planned import no_ranking, planned
 from planner.planning.refinement import refinement, scores_after
 from planner.planning.result import REFINING, PlannedPath
@@ -29,7 +38,13 @@ from planner.planning.strategies import Ranking
 from planner.recognition.session import Session
 from planner.types import Contact, Hypothesis, ObjectModel, SensorBounds
 
-__all__ = ["REFINE_GAIN", "WEAK_REFINEMENT", "one_class_paths", "refining_paths"]
+__all__ = [
+    "REFINE_GAIN",
+    "WEAK_REFINEMENT",
+    "apart_paths",
+    "one_class_paths",
+    "refining_paths",
+]
 
 #: Smallest share of the expected error disk a refining path must remove.
 REFINE_GAIN = 0.01
@@ -167,5 +182,35 @@ def _refining_by_recognition(
         "on the recognition's predictions (translation bound "
         f"{now_t:.3g} -> {judged.translation[first]:.3g}, rotation "
         f"{now_r:.3g} -> {judged.rotation[first]:.3g})"
+    )
+    return paths, note
+
+
+def apart_paths(
+    found: Analysis,
+    sensor: SensorBounds,
+    ranking: Ranking,
+    config: StrategyConfig,
+    why: str | None,
+) -> tuple[list[PlannedPath], str | None]:
+    """Nothing is predicted to change the classes on their nominal contacts (near
+    twins whose outlines differ by about the error bounds): the paths where the
+    most probable classes' nominal outcomes lie farthest apart, in error bounds
+    (:func:`~planner.planning.forecast.outcomes_apart`), then the shorter motion.
+    A measurement within the bounds may still tell the classes apart there, as it
+    cannot where their outcomes coincide. None where they coincide on every path."""
+    posed, out = found.posed, found.outcomes
+    top = np.argsort(-posed.class_weight, kind="stable")[:SHORTLIST_CLASSES_ALONE]
+    rows = np.arange(len(found.candidates))
+    apart = outcomes_apart(out, rows, posed.best_members(top), sensor)
+    order = np.lexsort((found.motion, -apart))
+    order = order[apart[order] > 0][: config.max_paths]
+    if not len(order):
+        return [], why
+    paths = [planned(found, int(i), ranking, family="partial") for i in order]
+    note = (
+        f"{why}; offered where the classes' nominal contacts lie farthest apart "
+        f"({float(apart[order[0]]):.2f} error bounds on the first path), where a "
+        "measurement within the bounds may still tell them apart"
     )
     return paths, note

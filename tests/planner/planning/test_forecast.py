@@ -358,10 +358,10 @@ def test_with_exact_sensing_the_outcome_models_ranking_stands(monkeypatch):
     assert not asked
 
 
-def test_outcomes_apart_measures_in_error_bounds():
+def testoutcomes_apart_measures_in_error_bounds():
     from types import SimpleNamespace
 
-    from planner.planning.forecast import _outcomes_apart
+    from planner.planning.forecast import outcomes_apart
 
     nan = np.nan
     out = SimpleNamespace(
@@ -383,7 +383,7 @@ def test_outcomes_apart_measures_in_error_bounds():
             ]
         ),
     )
-    apart = _outcomes_apart(out, np.arange(4), np.array([0, 1]), SensorBounds(1.0, 0.1))
+    apart = outcomes_apart(out, np.arange(4), np.array([0, 1]), SensorBounds(1.0, 0.1))
     np.testing.assert_allclose(apart[[0, 2, 3]], [3.0, 0.0, (math.pi / 2) / 0.1])
     assert apart[1] == np.inf  # a hit against a miss
 

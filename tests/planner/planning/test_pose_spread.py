@@ -137,3 +137,57 @@ def test_a_poorly_pinned_part_is_found_without_touching_air_again_and_again():
         where = tuple(np.add(path.origin, np.multiply(path.direction, path.length)))
     assert session.status == "localized"
     assert misses <= 1
+
+
+def test_near_twins_the_nominal_contacts_cannot_separate_still_get_a_path():
+    """Two bars 2.2 mm apart per side, touched on all four faces at 2 mm / 0.1 rad:
+    each one's nominal contacts are explained by the other within the bounds, so
+    the recognition predicts no change on any path it judged, and nothing refines
+    (the plan was empty: the robot stopped). The plan offers the paths where the
+    two classes' nominal outcomes lie farthest apart, where a measurement within
+    the bounds may still tell them apart."""
+    bars = [
+        object_from_dict(
+            {
+                "name": "wide",
+                "outline": [[-23.86, -7.0], [23.86, -5.83], [23.86, 5.83], [-23.86, 7.0]],
+            }
+        ),
+        object_from_dict(
+            {
+                "name": "thin",
+                "outline": [[-22.11, -4.78], [22.11, -3.29], [22.11, 3.29], [-22.11, 4.78]],
+            }
+        ),
+    ]
+    session = Session(bars, SensorBounds(2.0, 0.1), WORKSPACE)
+    for origin, direction, length, contact in [
+        ((200.0, 0.0), (-1.0, 0.0), 400.0, None),
+        (
+            (-59.3769755301123, -190.98265569652247), (0.3420201433256689, 0.9396926207859083),
+            399.54622787434346,
+            ((26.326239573826093, 43.388481174347625), (-0.30642459863936927, -0.9518949339862575)),
+        ),
+        (
+            (199.8429716183235, -7.92380557295209), (-0.9577161354927661, 0.2877147959643398),
+            182.63287042126765,
+            ((57.035281299772514, 35.595096039197436), (0.9441222862862204, -0.32959537092877994)),
+        ),
+        (
+            (-162.97190398132918, 115.93169761847032), (0.9424745193490182, -0.3342779986445972),
+            384.7005654631408,
+            ((13.230056723444363, 55.202669958255626), (-0.9380072139796707, 0.3466157332293161)),
+        ),
+        (
+            (-127.41343974034125, 154.16165338220276), (0.8510875517712297, -0.5250237891944083),
+            216.08762561267827,
+            ((37.60425400509882, 51.35198324503128), (0.30307130986736996, 0.9529678804321144)),
+        ),
+    ]:  # fmt: skip
+        path = SensingPath(origin, direction, length)
+        session = session.observe(Observation(path, None if contact is None else Contact(*contact)))
+    assert session.localization.classes == 2
+    result = plan_session(session, (0.0, 200.0), StrategyConfig(budget_ms=None), 0)
+    assert result.status == "ambiguous" and result.paths, result.note
+    assert "farthest apart" in result.note
+    assert all(p.p_distinguishing == 0 for p in result.paths)  # nothing is sure
