@@ -59,22 +59,10 @@ def test_extents_are_those_of_every_posed_draw_no_missed_path_meets():
     lo, hi = _prior_extents(models, WORKSPACE, missed, normal, 512)
     # the reference: pose every draw, drop those a missed path comes to within
     # rounding of, project every vertex
-    want_lo, want_hi = [], []
-    for draws in _prior_draws(models, WORKSPACE, 512, normal):
-        stable, theta, t = models["ell"].stable_poses[0], draws.theta, draws.t
-        posed = rotate(rotation_matrices(theta), stable.outline) + t[:, None]
-        start, end = posed, np.roll(posed, -1, axis=1)
-        met = np.zeros(len(theta), dtype=bool)
-        for p in missed:
-            a = np.array(p.origin)
-            b = a + p.length * np.array(p.direction)
-            met |= (segment_segment_distance(start, end, a, b) < 1e-9).any(axis=1)
-        proj = (posed[~met] - np.array(WORKSPACE.center)) @ normal.T
-        want_lo.append(proj.min(axis=1))
-        want_hi.append(proj.max(axis=1))
-    assert len(lo) == sum(len(x) for x in want_lo) < 512  # some draws were ruled out
-    assert np.allclose(lo, np.concatenate(want_lo), atol=1e-9)
-    assert np.allclose(hi, np.concatenate(want_hi), atol=1e-9)
+    want_lo, want_hi = _survivors(models, missed, normal, 512, 0)
+    assert len(lo) == len(want_lo) < 512  # some draws were ruled out
+    assert np.allclose(lo, want_lo, atol=1e-9)
+    assert np.allclose(hi, want_hi, atol=1e-9)
 
 
 def _survivors(models, missed, normal, samples, batch):
