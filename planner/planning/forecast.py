@@ -87,17 +87,19 @@ def forecast_distinguishing(
         return None  # it would stop before the last class: not even started
     # the ball tip's centre is what the session observes: cast the grown outlines
     # (a poorly pinned class at the pose its touches still allow, as the plan sees it)
+    # only each class' best member predicts: only they are posed and cast
     models = grown_models(session.models_by_name, session.sensor.tip_radius)
-    posed = pose_hypotheses(recentred(session, hypotheses), models, path.height)
+    leaders = [hypotheses[r] for r in first]
+    posed = pose_hypotheses(recentred(session, leaders), models, path.height)
     line = np.array([path.origin]), np.array([path.direction]), np.array([path.length])
     out = predict_outcomes(posed, *line, session.working_sensor, config or OutcomeConfig())
     trust = np.ones(len(first))  # the share of each class' poses its prediction holds for
     if path.height is None:
-        trust = agreement(session, [hypotheses[r] for r in first], out.hit[:, first], *line)[0]
-    for k, row, share in zip(cls[first], first, trust, strict=True):
+        trust = agreement(session, leaders, out.hit, *line)[0]
+    for j, (k, share) in enumerate(zip(cls[first], trust, strict=True)):
         if budget.exhausted():
             return None
-        after = _observed(session, path, out, 0, int(row))
+        after = _observed(session, path, out, 0, j)
         budget.spend_updates(1, size)
         if after is not None and len({h.equivalence_class for h in after.hypotheses}) == 1:
             total += float(weight[k]) * share
