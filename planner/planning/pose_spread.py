@@ -12,13 +12,14 @@ random parts.
 For each hypothesis whose translation bound is wide (`SPREAD_FROM` position
 bounds), poses are spread over the set consistent with its contacts
 (:func:`planner.recognition.consistent.consistent_poses`, the fit among them);
-those that put a contact off its finite face, or the outline across a path that
-missed, are dropped. The plan works on the one nearest their mean
-(:func:`recentred`), its bound widened by how far it moved, so that the outcome
-model's worst case still covers every pose the bound allowed; each miss drops the
-poses it passed through, and the next plan aims where the part may still be. The
-recognition's predictions count only on the share of the poses whose outcome on
-a path agrees with the planned pose's (:func:`agreement`).
+those that put a contact off its finite face, the outline across a path that
+missed, or part of it outside the safe circle, are dropped. The plan works on
+the one nearest their mean (:func:`recentred`), its bound widened by how far it
+moved, so that the outcome model's worst case still covers every pose the bound
+allowed; each miss drops the poses it passed through, and the next plan aims
+where the part may still be. The recognition's predictions count only on the
+share of the poses whose outcome on a path agrees with the planned pose's
+(:func:`agreement`).
 
 World frame, lengths in the object files' unit.
 """
@@ -38,7 +39,7 @@ from planner.models.tip import grown_models
 from planner.planning.outcomes import predict_outcomes
 from planner.planning.posed_set import pose_hypotheses
 from planner.recognition.consistent import consistent_poses
-from planner.recognition.model_check import contacts_on_faces
+from planner.recognition.model_check import contacts_on_faces, inside_workspace
 from planner.recognition.session import Session
 from planner.types import ErrorBound, Hypothesis, Pose
 
@@ -82,8 +83,9 @@ def _wide(session: Session, hypothesis: Hypothesis) -> bool:
 def admitted_poses(session: Session, hypothesis: Hypothesis) -> tuple[np.ndarray, np.ndarray]:
     """Poses (theta (M,), t (M, 2)) of `hypothesis` (its fit among them) spread
     over the set consistent with the session's contacts as it assigns them, that
-    keep every assigned contact on its finite face and the outline off every
-    path that missed (at the default height). Empty when none does or the set is
+    keep every assigned contact on its finite face, the outline off every path
+    that missed (at the default height) and inside the safe circle (when the
+    session requires the part there). Empty when none does or the set is
     unbounded (a slide the hypotheses themselves sample)."""
     return _admitted_all(session, [hypothesis])[0]
 
@@ -142,7 +144,8 @@ def _spread_group(
     session: Session, contacts: list, rows: list[Hypothesis]
 ) -> list[tuple[np.ndarray, np.ndarray]]:
     """The poses of `rows` (one stable pose) spread over their consistent sets,
-    kept where every assigned contact lies on its finite face (the fit first)."""
+    kept where every assigned contact lies on its finite face and the part inside
+    the safe circle (when the session requires it), the fit first."""
     points = np.array([c.point for c in contacts], dtype=float)
     normals = np.array([c.normal for c in contacts], dtype=float)
     assigned = np.array([[a is not None for a in h.assignment] for h in rows])
@@ -161,6 +164,12 @@ def _spread_group(
     valid = np.hstack([valid.any(axis=1, keepdims=True), valid])
     slack = eps_d + LENGTH_SLACK * session.length_scale
     valid &= contacts_on_faces(points, faces, face, assigned, theta, t, slack)
+    if session.config.require_inside_workspace:  # the part lies inside the safe circle
+        inside = inside_workspace(
+            stable.outline, theta.ravel(), t.reshape(-1, 2), np.zeros(theta.size),
+            session.workspace, slack,
+        )  # fmt: skip
+        valid &= inside.reshape(theta.shape)
     out = []
     for k in range(len(rows)):
         keep = np.flatnonzero(valid[k])

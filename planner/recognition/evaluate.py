@@ -346,6 +346,6 @@ def _outline_checks(
     ok = free_space_check(group, observations, assigned[src], theta, t, eps_t, ok, eps_d, slack)
     fitness = residual_fitness(
         group, observations, pose, samples, contacts.points, contacts.normals, face, assigned,
-        ok, eps_d, phi, config, slack,
+        ok, eps_d, phi, config, slack, workspace if config.require_inside_workspace else None,
     )  # fmt: skip
     return ok, fitness

@@ -17,10 +17,10 @@ import numpy as np
 from planner.geometry import LENGTH_SLACK, rotation_matrices
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.consistent import consistent_poses, consistent_volume
-from planner.recognition.model_check import clear_paths, contacts_on_faces
+from planner.recognition.model_check import clear_paths, contacts_on_faces, inside_workspace
 from planner.recognition.poses import PoseFit, SlideSamples, determined_rows
 from planner.recognition.tree import Group
-from planner.types import Faces, Observation
+from planner.types import Faces, Observation, Workspace
 
 __all__ = ["residual_fitness", "weights"]
 
@@ -42,14 +42,17 @@ def residual_fitness(
     phi: float,
     config: RecognitionConfig,
     slack: float,
+    workspace: Workspace | None = None,
 ) -> np.ndarray:
     """(N,) bounded-error likelihood of each sample's contacts, in (0, 1].
 
     Determined poses in `linearized` mode: the volume of the poses consistent with
     the contacts as measured over that with the contacts moved onto the fitted
     faces, times, for samples the checks kept (`ok` (N,)), the share of that set
-    which also keeps every contact on its finite face and every path clear of the
-    outline. 1 for slide-family samples, in `thesis` mode and where the `config`
+    which also keeps every contact on its finite face, every path clear of the
+    outline and, given the `workspace`, the part inside the safe circle (the
+    prior puts it there: a set mostly outside it is mostly impossible). 1 for
+    slide-family samples, in `thesis` mode and where the `config`
     leaves it out (a prediction). `face`, `assigned` (K, s) are the rows the
     samples were drawn from.
     """
@@ -88,6 +91,7 @@ def residual_fitness(
             spread[2][pos[live]],
             eps_d,
             max(slack, LENGTH_SLACK),
+            workspace,
         )
     return fitness
 
@@ -173,16 +177,24 @@ def _admitted_share(
     valid: np.ndarray,
     eps_d: float,
     floor: float,
+    workspace: Workspace | None = None,
 ) -> np.ndarray:
     """(K,) share of the poses spread over each row's consistent set (`theta`,
     `t`, `valid`: (K, M), (K, M, 2), (K, M)) whose contacts lie within eps_d of
-    their FINITE faces and whose paths (up to each contact less eps_d, or whole
-    when missed) stay out of the outline: the model check without the pose's
+    their FINITE faces, whose paths (up to each contact less eps_d, or whole
+    when missed) stay out of the outline and, given the `workspace`, whose
+    outline lies inside the safe circle: the model check without the pose's
     error allowance. It weighs, it does not prune (at least `_FITNESS_FLOOR`;
     1 where no pose is spread)."""
     K, M = valid.shape
     faces = group.stable.all_faces
     good = valid & contacts_on_faces(P, faces, face, assigned, theta, t, eps_d + floor)
+    if workspace is not None:
+        inside = inside_workspace(
+            group.stable.outline, theta.reshape(-1), t.reshape(-1, 2), np.zeros(K * M),
+            workspace, floor,
+        )  # fmt: skip
+        good &= inside.reshape(K, M)
     clear = clear_paths(
         group,
         observations,

@@ -13,14 +13,16 @@ from __future__ import annotations
 import numpy as np
 
 from hardware_sim.world import World
+from planner.geometry import rotate, rotation_matrices
 from planner.models.library import object_from_dict
 from planner.planning import pose_spread
 from planner.planning.config import StrategyConfig
 from planner.planning.plan import plan_session
 from planner.planning.pose_spread import admitted_poses, agreement, recentred
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import contacts_on_faces
 from planner.recognition.session import Session
-from planner.types import Contact, Observation, Pose, SensingPath, SensorBounds
+from planner.types import Contact, Observation, Pose, SensingPath, SensorBounds, Workspace
 from tests.conftest import WORKSPACE
 
 SLIVER = object_from_dict(
@@ -84,6 +86,31 @@ def test_the_fit_of_a_poorly_pinned_part_is_moved_where_it_may_lie():
             BOUNDS.position_error + 1e-6,
         )
         assert on.tolist() == [[True, False]]
+
+
+def _reach(theta, t):
+    """The farthest posed outline vertex from the circle's centre, per pose."""
+    R = rotation_matrices(theta)
+    v = rotate(R, np.asarray(SLIVER.stable_poses[0].outline, dtype=float)) + t[:, None]
+    return np.hypot(v[..., 0], v[..., 1]).max(axis=1)
+
+
+def test_the_poses_spread_keep_the_part_inside_the_safe_circle():
+    def spread(radius, inside=True):
+        config = RecognitionConfig(require_inside_workspace=inside)
+        session = Session([SLIVER], BOUNDS, Workspace((0.0, 0.0), radius), config)
+        for o in RECORDED:
+            session = session.observe(o)
+        return [admitted_poses(session, h) for h in session.hypotheses]
+
+    wide = spread(200.0)
+    assert all(len(theta) >= 2 for theta, _ in wide)
+    assert max(_reach(*poses).max() for poses in wide) > 150.0  # some reach past 150
+    cut = spread(150.0)
+    for (theta, t), (all_theta, _) in zip(cut, spread(150.0, inside=False), strict=True):
+        assert len(theta) and _reach(theta, t).max() <= 150.0 + BOUNDS.position_error + 1e-6
+        assert len(theta) <= len(all_theta)
+    assert sum(len(theta) for theta, _ in cut) < sum(len(theta) for theta, _ in wide)
 
 
 def test_the_poses_spread_are_bounded_in_advance(monkeypatch):

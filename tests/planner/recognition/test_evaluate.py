@@ -3,6 +3,7 @@ error bounds, slide-family samples, model check, free-space check, weights."""
 
 from __future__ import annotations
 
+import itertools
 import math
 from concurrent.futures import ThreadPoolExecutor
 
@@ -345,6 +346,30 @@ def test_inside_workspace_keeps_poses_whose_outline_stays_in_the_safe_circle():
     )
 
 
+@settings(max_examples=60, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), vertices=st.integers(3, 400))
+def test_inside_workspace_answers_as_every_posed_vertex_does(seed, vertices):
+    # poses far from the rim skip posing the vertices: the answer is the same
+    rng = np.random.default_rng(seed)
+    angle = np.sort(rng.uniform(0, 2 * math.pi, vertices))
+    radius = rng.uniform(2, 30, vertices)
+    outline = np.column_stack([radius * np.cos(angle), radius * np.sin(angle)]) + rng.uniform(
+        -10, 10, 2
+    )
+    ws = Workspace(tuple(rng.uniform(-20, 20, 2)), float(rng.uniform(40, 120)))
+    n = 300
+    theta = rng.uniform(-math.pi, math.pi, n)
+    t = np.asarray(ws.center) + rng.uniform(-1.2, 1.2, (n, 2)) * ws.radius
+    eps_t = rng.uniform(0, 6, n) * (rng.random(n) < 0.7)
+    R = rotation_matrices(theta)
+    verts = np.einsum("nij,vj->nvi", R, outline) + t[:, None]
+    reach = np.hypot(*(verts - np.asarray(ws.center)).transpose(2, 0, 1)).max(axis=1)
+    expected = reach <= ws.radius + eps_t / 2 + 0.5
+    found = inside_workspace(outline, theta, t, eps_t, ws, 0.5)
+    assert np.array_equal(found, expected)
+    assert 0 < expected.sum() < n  # both answers are met
+
+
 # -- free-space check (§4.5) -----------------------------------------------------------
 SQUARE_GROUP = make_groups([SQUARE])[0]
 
@@ -484,12 +509,12 @@ def _square_row(observations, config=CONFIG):
     return pose, samples, f, face, np.ones((1, 2), bool)
 
 
-def _square_fitness(observations, config=CONFIG):
+def _square_fitness(observations, config=CONFIG, workspace=None):
     pose, samples, _, face, assigned = _square_row(observations, config)
     P, U, _, _ = _arrays(observations)
     eps_d, phi = BOUNDS.position_error, BOUNDS.normal_error
     ok = np.ones(len(samples.src), bool)
-    args = (pose, samples, P, U, face, assigned, ok, eps_d, phi, config, _slack(10.0))
+    args = (pose, samples, P, U, face, assigned, ok, eps_d, phi, config, _slack(10.0), workspace)
     return residual_fitness(SQUARE_GROUP, observations, *args)
 
 
@@ -540,6 +565,29 @@ def test_residual_fitness_is_one_for_exact_contacts_and_less_on_the_edges():
     thesis = RecognitionConfig(bound_mode="thesis")
     f_thesis = _square_fitness(turned, thesis)
     assert f_thesis.tolist() == [1.0]
+
+
+def test_residual_fitness_counts_only_the_poses_inside_the_safe_circle():
+    # the prior puts the part inside the safe circle: the share of the consistent
+    # set outside it is impossible, and a set wholly outside keeps the floor weight
+    half = BOUNDS.normal_error / 2
+    turned = [
+        Observation(o.path, Contact(o.contact.point, _turn(o.contact.normal, sign * half)))
+        for o, sign in zip(_square_hits(0.0), (1, -1), strict=True)
+    ]
+    free = _square_fitness(turned)[0]
+    assert 0 < free < 1
+    # the square's corners lie 14.1 from the centre, its poses within about 2 of it
+    shares = [
+        _square_fitness(turned, workspace=Workspace((0.0, 0.0), r))[0]
+        for r in (1000.0, 17.0, 16.0, 15.0, 14.5, 13.0)
+    ]
+    assert shares[0] == free
+    assert all(a >= b for a, b in itertools.pairwise(shares))
+    assert shares[-1] <= 1e-6
+    assert free > shares[3] > shares[-1]  # a circle through the set keeps a part of it
+    away = _square_fitness(turned, workspace=Workspace((500.0, 0.0), 100.0))[0]
+    assert away <= 1e-6
 
 
 def _turn(u, angle):
