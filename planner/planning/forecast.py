@@ -101,7 +101,7 @@ def forecast_distinguishing(
             return None
         after = _observed(session, path, out, 0, j)
         budget.spend_updates(1, size)
-        if after is not None and len({h.equivalence_class for h in after.hypotheses}) == 1:
+        if _class_count(after) == 1:
             total += float(weight[k]) * share
     return min(total / float(weight.sum()), 1.0)
 
@@ -375,8 +375,18 @@ def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int
 def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:
     """Classes left once the session observes hypothesis `h`'s nominal outcome on
     candidate `c` (0 when the predicted observation is not a valid one)."""
-    after = _observed(session, path, out, c, h)
-    return 0 if after is None else len({g.equivalence_class for g in after.hypotheses})
+    return _class_count(_observed(session, path, out, c, h))
+
+
+def _class_count(after: Session | None) -> int:
+    """Classes a predicted session holds (0: none, or not a valid observation).
+    One hypothesis or none is as many classes, known before the classes are
+    found: most predictions leave one, and the classes cost a fifth of one."""
+    if after is None:
+        return 0
+    if after.hypothesis_count <= 1:
+        return after.hypothesis_count
+    return len({g.equivalence_class for g in after.hypotheses})
 
 
 @dataclass(frozen=True, eq=False)
