@@ -172,10 +172,17 @@ def _at_height(
     else:  # the first block too keeps to what the budget has left (at least one path)
         affordable = budget.affordable("outcome_cell") / (per_cell * len(posed))
         block = size if affordable >= size else max(1, int(affordable))
-    for lo in range(0, max(len(cands), 1), max(block, 1)):
-        if outcomes and budget.exhausted():
-            break
-        part = cands.subset(np.arange(lo, min(lo + block, len(cands))))
+    lo = 0
+    while lo < len(cands) or not outcomes:
+        take = max(block, 1)
+        if outcomes:  # past the first block, none starts that the budget cannot pay for
+            if budget.exhausted():
+                break
+            take = min(take, int(budget.affordable("outcome_cell") / (per_cell * len(posed))))
+            if take < 1:
+                break
+        part = cands.subset(np.arange(lo, min(lo + take, len(cands))))
+        lo += take
         out = predict_outcomes(
             posed, part.origins, part.directions, part.lengths, sensor, config.outcome
         )

@@ -21,6 +21,7 @@ from planner.planning.intersection_aims import intersection_aims
 from planner.planning.posed_set import pose_hypotheses
 from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath, SensorBounds, Workspace
+from tests.conftest import object_set
 
 
 def gon(n: int, r: float, c: tuple[float, float] = (0.0, 0.0)) -> list[list[float]]:
@@ -66,7 +67,7 @@ def test_intersection_aims_coarsen_then_give_up_with_the_budget(holey):
     assert len(intersection_aims(posed, 8, 24)) >= len(aims)
 
 
-@pytest.mark.parametrize("work", [20_000.0, 200_000.0])
+@pytest.mark.parametrize("work", [20_000.0, 200_000.0, 600_000.0])
 def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(holey, work):
     session, posed = holey
     budget = Budget(work=work)
@@ -99,3 +100,31 @@ def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(hol
         budget=again,
     )
     assert again.spent == budget.spent
+
+
+@pytest.mark.parametrize("work", [40_000.0, 60_000.0, 120_000.0])
+def test_no_block_of_paths_starts_past_what_the_budget_can_pay_for(work):
+    # the first block is sized to the budget; a later one started while anything
+    # was left, and a block of 78 paths overshot 60,000 units by 49,000
+    session = Session(
+        object_set("thesis_like"), SensorBounds(1.0, math.radians(3)), Workspace((0, 0), 200)
+    )
+    session = session.observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -20), (0, -1)))
+    )
+    posed = pose_hypotheses(session.hypotheses, session.models_by_name)
+    budget = Budget(work=work)
+    found = analyse(
+        session.hypotheses,
+        session.models,
+        session.bounds,
+        session.workspace,
+        (200, 0),
+        StrategyConfig(),
+        0,
+        observations=session.observations,
+        budget=budget,
+    )
+    per_path = len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
+    assert found.truncated and len(found.candidates) > 16  # several blocks, cut
+    assert budget.units <= work + per_path
