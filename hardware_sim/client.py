@@ -132,6 +132,11 @@ class RecognitionService(Protocol):
         every member's and, for a class of one, is its own; None without one."""
         ...
 
+    def answer(self, limit: int | None = None) -> tuple[list[Estimate], float | None]:
+        """:meth:`estimates` and :meth:`answer_bound` of one state of the session
+        (over HTTP, one request)."""
+        ...
+
 
 class InProcessService:
     """:class:`RecognitionService` calling the planner library in this process.
@@ -191,6 +196,9 @@ class InProcessService:
     def answer_bound(self) -> float | None:
         bound = self.session.localization.bound
         return None if bound is None else float(bound.eps_t)
+
+    def answer(self, limit: int | None = None) -> tuple[list[Estimate], float | None]:
+        return self.estimates(limit), self.answer_bound()
 
     def estimates(self, limit: int | None = None) -> list[Estimate]:
         hyps = self.session.hypotheses[:limit]
@@ -283,9 +291,8 @@ def run_recognition(
         status = update.status
         if status in DONE:
             break
-    return Recognition(
-        status, tuple(steps), tuple(service.estimates(limit=None)), service.answer_bound()
-    )
+    estimates, bound = service.answer(limit=None)
+    return Recognition(status, tuple(steps), tuple(estimates), bound)
 
 
 def outline_distance(

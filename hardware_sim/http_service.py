@@ -341,16 +341,15 @@ class HttpService:
 
     def answer_bound(self) -> float | None:
         """``GET /v1/sessions/{id}``: the bound of its ``localization``."""
-        state: SessionOut = self._send(
-            "GET /v1/sessions/{id}",
-            lambda: get_session.sync_detailed(self.session_id, client=self.client, limit=1),
-            200,
-        )
-        bound = state.localization.bound
-        return None if bound is None else float(bound.eps_t)
+        return self.answer(limit=1)[1]
 
     def estimates(self, limit: int | None = None) -> list[Estimate]:
         """``GET /v1/sessions/{id}``: the hypotheses, most probable first."""
+        return self.answer(limit)[0]
+
+    def answer(self, limit: int | None = None) -> tuple[list[Estimate], float | None]:
+        """``GET /v1/sessions/{id}``, once: the hypotheses (most probable first) and
+        the bound of its ``localization``."""
         state: SessionOut = self._send(
             "GET /v1/sessions/{id}",
             lambda: get_session.sync_detailed(
@@ -358,7 +357,8 @@ class HttpService:
             ),
             200,
         )
-        return [
+        bound = state.localization.bound
+        estimates = [
             Estimate(
                 h.object_,
                 h.stable_pose,
@@ -370,6 +370,7 @@ class HttpService:
             )
             for h in state.hypotheses
         ]
+        return estimates, None if bound is None else float(bound.eps_t)
 
     # -- beyond the protocol -----------------------------------------------------------------
     def picture(self, fmt: str = "png", view: str = "vector") -> bytes:

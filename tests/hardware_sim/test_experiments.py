@@ -75,6 +75,9 @@ class _Service:
     def answer_bound(self):
         return None
 
+    def answer(self, limit=None):
+        return self.estimates(limit), self.answer_bound()
+
 
 class _MissingProbe:
     position = (100.0, 0.0)

@@ -80,6 +80,23 @@ def test_http_loop_makes_the_same_touches_as_the_in_process_loop(client, seed):
     assert remote.version == 1 + b.touches
 
 
+def test_the_answer_is_read_in_one_request(client, monkeypatch):
+    # the hypotheses and the bound of one state, not two reads of the session
+    world = random_world(MODELS, WORKSPACE, np.random.default_rng(3))
+    remote = _new(client, 3)
+    sent = []
+    send = remote._send
+
+    def counted(what, call, *expected):
+        sent.append(what)
+        return send(what, call, *expected)
+
+    monkeypatch.setattr(remote, "_send", counted)
+    rec = run_recognition(remote, build_arm(world, PRESET, 3), max_touches=12)
+    assert rec.status == "localized" and rec.bound is not None and rec.estimates
+    assert sent.count("GET /v1/sessions/{id}") == 1
+
+
 def _flat(o: Observation) -> list[float]:
     """An observation's numbers (a miss: zeros and a 0 flag for its contact)."""
     c = o.contact
