@@ -90,12 +90,16 @@ class SearchResult:
 class _Search:
     """E(S) by branch and bound over the nodes of a :class:`SearchSpace`, memoized
     on the state (`exact`) and on (state, depth) (`limited`), stopped by
-    `budget`."""
+    `budget`; with `whole`, a two-deep ranking the budget cannot finish is not
+    begun."""
 
-    def __init__(self, table: SurvivorTable, budget: Budget, rate: float | None = None) -> None:
+    def __init__(
+        self, table: SurvivorTable, budget: Budget, rate: float | None = None, whole: bool = False
+    ) -> None:
         self.space = SearchSpace(table, rate)
         self.n = table.n_classes
         self.budget = budget
+        self.whole = whole
         self.exact: dict[bytes, float] = {}
         self.limited: dict[tuple[bytes, int], float] = {}
 
@@ -276,6 +280,14 @@ class _Search:
         with close values prune little.) Skips the paths whose bound reaches the
         top_k-th exact objective found so far; fills `value` and `exact` of the paths
         done and returns whether the budget stopped it."""
+        if self.whole:
+            # every distinct child set is valued one touch deep: a search the budget
+            # cannot pay for to the end is not begun (its caller would throw it away)
+            children = node.child[order][node.open[order]]
+            if len(children) and self.budget.affordable("leaf_set") < len(
+                np.unique(children, axis=0)
+            ):
+                return True
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
         while lo < len(order):
@@ -350,6 +362,7 @@ def expected_remaining(
     budget: Budget | None = None,
     state: np.ndarray | None = None,
     leaf: str = "touch",
+    whole: bool = False,
 ) -> SearchResult:
     """Expected remaining touches E_P(S) of each root path P (this touch included).
 
@@ -361,7 +374,10 @@ def expected_remaining(
     `truncated` set); `state` is the hypothesis set S (bool over classes or a
     bitset; default all classes); `leaf` values the open sets at the horizon:
     ``"touch"`` one touch each (every value a lower bound), ``"entropy"``
-    max(1, log |T| / rate) (see the module's text).
+    max(1, log |T| / rate) (see the module's text). With `whole`, a search two
+    touches deep that the budget cannot pay for to the end (one valuation per
+    distinct set the root paths leave) is not begun: `truncated`, every value a
+    bound, nothing spent (for a caller that throws a cut search away).
 
     >>> from planner.planning.bitsets import SurvivorTable
     >>> eye = np.eye(3, dtype=bool)
@@ -376,7 +392,7 @@ def expected_remaining(
         raise ValueError(f"leaf must be one of {LEAVES}")
     full = _full_state(table, state)
     gain = state_gain(table, full)
-    search = _Search(table, budget or Budget(), _rate(gain) if leaf == "entropy" else None)
+    search = _Search(table, budget or Budget(), _rate(gain) if leaf == "entropy" else None, whole)
     root_paths = np.arange(table.n_paths) if paths is None else np.asarray(paths, dtype=int)
     extra = np.zeros(table.n_paths) if extra_cost is None else np.asarray(extra_cost, float)
     return search.rank(full, depth, root_paths, top_k, extra, gain)

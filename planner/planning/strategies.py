@@ -98,7 +98,7 @@ def rank_candidates(
     if len(top) and not ranking.exact[top].all():
         # strategies that do not search: `depth` deep on small sets, else one touch deep
         depth = config.depth if table.n_classes <= config.optimal_max_classes else 1
-        result = expected_remaining(table, depth, paths=top, budget=ctx.budget)
+        result = expected_remaining(table, depth, paths=top, budget=ctx.budget, whole=True)
         value = np.where(ranking.exact, ranking.expected_remaining, result.value)
         exact = ranking.exact | result.exact
         return Ranking(
@@ -165,6 +165,7 @@ def _lookahead(ctx: _Context, depth: int | None = None, note: str | None = None)
         extra_cost=ctx.config.motion_weight * ctx.motion,
         budget=ctx.budget,
         leaf="entropy",
+        whole=True,  # a search the budget stops is ranked by information gain instead
     )
     # cost = E_P + motion_weight * motion_cost; exact values rank before bounds; equal
     # costs go to the larger P(DM) (finish now), then the larger information gain (a

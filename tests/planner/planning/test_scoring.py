@@ -17,7 +17,7 @@ from hypothesis import strategies as st
 
 from planner.models.outlines import make_stable_pose
 from planner.planning.bitsets import SurvivorTable, pack_bits
-from planner.planning.budget import Budget
+from planner.planning.budget import UNIT_US, Budget
 from planner.planning.confusability import confusability, survivor_table
 from planner.planning.leaf_kernel import cliques, undominated
 from planner.planning.outcomes import predict_outcomes
@@ -530,3 +530,27 @@ def test_dominated_paths_leave_the_lookahead_unchanged(k, n_paths, seed):
     for depth in (1, 2, 3):
         found = expected_remaining(table, depth)
         np.testing.assert_allclose(found.value, lookahead_reference(table, depth), rtol=1e-9)
+
+
+def test_a_whole_search_the_budget_cannot_finish_is_not_begun():
+    # a plan ranks a search the budget stops by information gain, so the work of
+    # the cut search is lost: asked for whole, it is not begun and nothing is spent
+    rng = np.random.default_rng(3)
+    k, n_paths = 40, 400
+    conf = rng.random((n_paths, k, k)) < rng.uniform(0.05, 0.6, (n_paths, 1, 1))
+    table = SurvivorTable.from_matrix(conf | conf.transpose(0, 2, 1), np.ones(k) / k)
+    free = Budget()
+    full = expected_remaining(table, 2, budget=free, whole=True)
+    assert not full.truncated and full.exact.all()
+    needed = free.spent["leaf_set"]
+    short = Budget(work=(needed - 1) * UNIT_US["leaf_set"])
+    cut = expected_remaining(table, 2, budget=short, whole=True)
+    assert cut.truncated and not cut.exact[np.isfinite(cut.value)].any()
+    assert short.spent["leaf_set"] == 0 and not short.exhausted()
+    # every value a lower bound of the searched one
+    assert (cut.value <= full.value + 1e-12).all()
+    # with the work it needs, the same values as without a budget
+    enough = expected_remaining(
+        table, 2, budget=Budget(work=needed * UNIT_US["leaf_set"]), whole=True
+    )
+    np.testing.assert_array_equal(enough.value, full.value)
