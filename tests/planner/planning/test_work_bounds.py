@@ -128,3 +128,51 @@ def test_no_block_of_paths_starts_past_what_the_budget_can_pay_for(work):
     per_path = len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
     assert found.truncated and len(found.candidates) > 16  # several blocks, cut
     assert budget.units <= work + per_path
+
+
+def _touched_once(name: str, contact: Contact, direction=(0, 1)) -> Session:
+    session = Session(object_set(name), SensorBounds(1.0, math.radians(3)), Workspace((0, 0), 200))
+    origin = tuple(np.asarray(contact.point) - 200 * np.asarray(direction))
+    return session.observe(Observation(SensingPath(origin, direction, 400), contact))
+
+
+def test_a_forecast_its_share_cannot_pay_for_leaves_that_share_to_the_checks(monkeypatch):
+    # one recognition update per class: after one contact on the twins (a hundred
+    # classes) the forecast's quarter of the work could never pay, so the quarter goes
+    # to the recognition's check of the ranked paths; with a few classes it stays
+    from planner.planning import plan as plan_module
+
+    seen = []
+    real_plan, real_weak = plan_module.plan, plan_module._unless_weak
+
+    def spy_plan(*args, **kw):
+        seen.append(("judging", kw["judging"], kw["budget"].work))
+        return real_plan(*args, **kw)
+
+    def spy_weak(found, session, ranking, config, budget, paths):
+        seen.append(("checks", budget.work))
+        return real_weak(found, session, ranking, config, budget, paths)
+
+    monkeypatch.setattr(plan_module, "plan", spy_plan)
+    monkeypatch.setattr(plan_module, "_unless_weak", spy_weak)
+    config = StrategyConfig(budget_work=400_000.0)
+    many = _touched_once("twins", Contact((0, -10), (0, -1)))
+    assert len({h.equivalence_class for h in many.hypotheses}) > 50
+    plan_module.plan_session(many, (200, 0), config, 0)
+    assert seen[0] == ("judging", 100_000.0, 300_000.0)
+    assert seen[1] == ("checks", 400_000.0)
+    seen.clear()
+    few = many
+    for point in [(30, 5), (-30, 5)]:  # hits on the sides: the plate pinned
+        side = (1, 0) if point[0] > 0 else (-1, 0)
+        few = few.observe(
+            Observation(
+                SensingPath((point[0] + 200 * side[0], point[1]), (-side[0], 0), 400),
+                Contact(point, side),
+            )
+        )
+    classes = len({h.equivalence_class for h in few.hypotheses})
+    assert 1 < classes <= 8  # the eight twins: eight updates fit in the quarter
+    plan_module.plan_session(few, (200, 0), config, 0)
+    assert seen[0] == ("judging", 0.0, 300_000.0)
+    assert all(entry == ("checks", 300_000.0) for entry in seen[1:])
