@@ -26,14 +26,13 @@ import numpy as np
 
 from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis, analyse, as_generator, models_by_name
-from planner.planning.budget import UNIT_US, Budget
+from planner.planning.budget import Budget
 from planner.planning.config import StrategyConfig
 from planner.planning.forecast import (
     SHORTLIST_CLASSES_ALONE,
     RecognitionRanking,
     predictions,
     recognition_ranking,
-    update_size,
     with_forecast,
 )
 from planner.planning.planned import planned
@@ -107,11 +106,6 @@ def _plan_session(
         session.hypotheses, session.symmetry_tolerance, session.joined_classes, faces
     )
     sample = weighted_sample(reps, face_counts(reps, by_name))
-    # a forecast its share cannot pay for is not begun: that share goes to the
-    # recognition's check of the plan's paths instead
-    each = UNIT_US["recognition_update"] + update_size(session) * UNIT_US["recognition_hypothesis"]
-    classes = len({h.equivalence_class for h in session.hypotheses})
-    spare = share is not None and total is not None and (classes - 1) * each > total - share
     result = plan(
         recentred(session, sample),
         session.models,
@@ -124,7 +118,6 @@ def _plan_session(
         localized=session.status == "localized",
         session=session,
         budget=budget,
-        judging=total - share if spare else 0.0,  # type: ignore[operator]
     )
     budget.raise_to(total)
     if len(sample) < len(reps):
@@ -173,7 +166,6 @@ def plan(
     localized: bool | None = None,
     session: Session | None = None,
     budget: Budget | None = None,
-    judging: float = 0.0,
 ) -> Plan:
     """Rank the next sensing paths for a hypothesis set (world frame).
 
@@ -181,8 +173,7 @@ def plan(
     `observations` (the session's, in order) tell whether anything was touched
     yet and give the contacts the thesis opening needs; `extra_paths` join the
     candidates; `rng` (or a seed; default 0) drives the random choices; the
-    `budget` (default: `config`'s) covers the whole call, with `judging` units
-    more that only the recognition's checks of the ranked paths may spend.
+    `budget` (default: `config`'s) covers the whole call.
 
     With no hypothesis and no contact the plan is the opening probe (status
     ``awaiting_contact``); with contacts but no hypothesis, empty
@@ -244,8 +235,6 @@ def plan(
         budget=budget,
     )
     paths = [planned(found, int(i), ranking) for i in ranking.order[: config.max_paths]]
-    if judging:  # work only the recognition's checks of these paths may spend
-        budget.raise_to(budget.work + judging)
     paths, note = _unless_weak(found, session, ranking, config, budget, paths)
     if not paths:
         paths, note = _uninformative(
