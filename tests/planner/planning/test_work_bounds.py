@@ -67,11 +67,9 @@ def test_intersection_aims_coarsen_then_give_up_with_the_budget(holey):
     assert len(intersection_aims(posed, 8, 24)) >= len(aims)
 
 
-@pytest.mark.parametrize("work", [20_000.0, 200_000.0, 600_000.0])
-def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(holey, work):
-    session, posed = holey
-    budget = Budget(work=work)
-    found = analyse(
+def _analysed(session: Session, budget: Budget):
+    """The plan's analysis of `session` from (200, 0) at default settings."""
+    return analyse(
         session.hypotheses,
         session.models,
         session.bounds,
@@ -82,23 +80,25 @@ def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(hol
         observations=session.observations,
         budget=budget,
     )
+
+
+def _per_path(posed) -> float:
+    """What casting one path against `posed` costs (units)."""
+    return len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
+
+
+@pytest.mark.parametrize("work", [20_000.0, 200_000.0, 600_000.0])
+def test_a_plan_on_many_faces_spends_at_most_one_cast_path_beyond_its_budget(holey, work):
+    session, posed = holey
+    budget = Budget(work=work)
+    found = _analysed(session, budget)
     assert len(found.candidates) >= 1
-    per_path = len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
+    per_path = _per_path(posed)
     # each stage is sized before it starts: past the budget only by the first path cast
     assert budget.units <= work + per_path
     # the count is the work: the same request spends the same units again
     again = Budget(work=work)
-    analyse(
-        session.hypotheses,
-        session.models,
-        session.bounds,
-        session.workspace,
-        (200, 0),
-        StrategyConfig(),
-        0,
-        observations=session.observations,
-        budget=again,
-    )
+    _analysed(session, again)
     assert again.spent == budget.spent
 
 
@@ -114,17 +114,7 @@ def test_no_block_of_paths_starts_past_what_the_budget_can_pay_for(work):
     )
     posed = pose_hypotheses(session.hypotheses, session.models_by_name)
     budget = Budget(work=work)
-    found = analyse(
-        session.hypotheses,
-        session.models,
-        session.bounds,
-        session.workspace,
-        (200, 0),
-        StrategyConfig(),
-        0,
-        observations=session.observations,
-        budget=budget,
-    )
-    per_path = len(posed) * max(1.0, posed.valid.sum() / len(posed) / 12) * UNIT_US["outcome_cell"]
+    found = _analysed(session, budget)
+    per_path = _per_path(posed)
     assert found.truncated and len(found.candidates) > 16  # several blocks, cut
     assert budget.units <= work + per_path
