@@ -97,13 +97,16 @@ def consistent_set_bounds(
     `points`, `normals` (s, 2) measured, or (K, s, 2) per row; `face_normals`
     (K, s, 2), `face_offsets` (K, s), `assigned` (K, s) as for :func:`fit_batch`;
     `theta` (K,), `t` (K, 2) the fits; `model_points` (P, 2), the outline's
-    vertices among them. Rows whose latest `max_contacts` assigned contacts hold no
-    two non-parallel faces are unknown (inf, feasible): the polygon is unbounded.
+    vertices among them, or (K, P, 2) per row (rows of several outlines, each
+    padded with copies of its own points). Rows whose latest `max_contacts`
+    assigned contacts hold no two non-parallel faces are unknown (inf, feasible):
+    the polygon is unbounded.
     """
     K, s = assigned.shape
-    P = len(model_points)
+    P = np.shape(model_points)[-2]
     points = np.broadcast_to(points, (K, s, 2))
     normals = np.broadcast_to(normals, (K, s, 2))
+    model_points = np.broadcast_to(np.asarray(model_points, dtype=float), (K, P, 2))
     moved = np.full((K, P), np.inf)
     dth = np.full(K, np.inf)
     feasible = np.ones(K, dtype=bool)
@@ -113,7 +116,8 @@ def consistent_set_bounds(
     use = assigned & (from_end <= max_contacts)
     slack = ANGLE_SLACK  # rounding of the measured angles
     lo, hi = _theta_interval(normals, face_normals, use, theta, phi + slack)
-    lever = float(np.hypot(*np.asarray(model_points, dtype=float).T).max()) + eps_d
+    # (K,) the farthest a contact can lie from t': each row's outline radius plus eps_d
+    lever = np.hypot(model_points[..., 0], model_points[..., 1]).max(axis=1) + eps_d
     # a chunk's largest arrays: the crossings of the used contacts' slabs (at most
     # `max_contacts` of them) at every rotation, and the model points moved
     used = min(s, max_contacts)
@@ -130,9 +134,9 @@ def consistent_set_bounds(
             t[sl],
             lo[sl],
             hi[sl],
-            model_points,
+            model_points[sl],
             eps_d,
-            lever,
+            lever[sl],
             samples,
         )
     return ConsistentSet(moved, dth, feasible)
@@ -149,10 +153,11 @@ def _sweep(
     hi: np.ndarray,
     model_points: np.ndarray,
     eps_d: float,
-    lever: float,
+    lever: np.ndarray,
     samples: int,
 ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """:func:`consistent_set_bounds` on one chunk of rows."""
+    """:func:`consistent_set_bounds` on one chunk of rows (`model_points` (K, P, 2),
+    `lever` (K,) per row)."""
     empty_range = hi < lo
     span = np.where(empty_range, 0.0, hi - lo)
     delta = span / (samples - 1)  # (K,) step between samples
@@ -166,13 +171,13 @@ def _sweep(
     # displacement of each model point: R' v + t' - (R v + t), largest over the vertices
     model_points = c_array(model_points, dtype=float)
     fit_pts = rotate(rotation_matrices(theta), model_points) + t[:, None, :]
-    norm = np.full((len(theta), len(model_points)), -np.inf)
+    norm = np.full(model_points.shape[:2], -np.inf)
     _largest_moves(
         c_array(vx), c_array(vy), c_array(ok),
         c_array(theta[:, None] + d_theta), model_points, fit_pts, norm,
     )  # fmt: skip
-    radius = np.hypot(*model_points.T)  # (P,) |v|
-    moved = norm + radius[None] * delta[:, None] / 2  # (K, P)
+    radius = np.hypot(model_points[..., 0], model_points[..., 1])  # (K, P) |v|
+    moved = norm + radius * delta[:, None] / 2  # (K, P)
     feasible = ok.any(axis=2)  # (K, N)
     ang = np.where(feasible, np.abs(d_theta), -np.inf).max(axis=1)
     dth = ang + delta / 2
@@ -185,13 +190,13 @@ def _sweep(
 
 @numba.njit(cache=True, nogil=True)
 def _largest_moves(vx, vy, ok, angle, model_points, fit_pts, out):  # type: ignore[no-untyped-def]
-    """out[k, p] = the largest ``|R(angle[k, n]) v_p + (vx, vy)[k, n, i] - fit_pts[k, p]|``
+    """out[k, p] = the largest ``|R(angle[k, n]) v_kp + (vx, vy)[k, n, i] - fit_pts[k, p]|``
     over the rotations n and the polygon vertices i that are `ok` (left as it is
     where none is): one pass, without the (K, N, V, P) array of displacements.
     Each rotated point is computed once per rotation, and the squares compared
     (the root of the largest square is the largest root, to the bit)."""
     K, N, V = vx.shape
-    P = model_points.shape[0]
+    P = model_points.shape[1]
     rx = np.empty(P)
     ry = np.empty(P)
     fx = np.empty(P)
@@ -205,7 +210,7 @@ def _largest_moves(vx, vy, ok, angle, model_points, fit_pts, out):  # type: igno
         for n in range(N):
             c, s = math.cos(angle[k, n]), math.sin(angle[k, n])
             for p in range(P):
-                mx, my = model_points[p, 0], model_points[p, 1]
+                mx, my = model_points[k, p, 0], model_points[k, p, 1]
                 rx[p] = c * mx - s * my
                 ry[p] = s * mx + c * my
             for i in range(V):

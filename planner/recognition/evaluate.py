@@ -31,6 +31,7 @@ from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import free_space_check, inside_workspace, model_check
 from planner.recognition.poses import (
     PoseFit,
+    RowOutlines,
     RowShapes,
     SampleBounds,
     SlideSamples,
@@ -206,13 +207,16 @@ def evaluate_groups(
         length_scale,
     )
     parts = stack.parts(samples.src)
+    # the bounds of consecutive stable poses with about as many faces in one pass
+    sizes = [len(g.all_faces.start) for g in stables]
     bound = _joined_bounds(
         [
             sample_bounds(
-                pose.part(rs), fit_bound.part(rs), samples.part(rs, ss), stables[j], P, U,
-                stack.local_faces[j], stack.assigned_parts[j], eps_d, phi, config, slack,
+                pose.part(rs), fit_bound.part(rs), samples.part(rs, ss),
+                RowOutlines.of(stables[gs], stack.counts[gs], sum(sizes[: gs.start])),
+                stack.faces, P, U, face[rs], assigned[rs], eps_d, phi, config, slack,
             )
-            for j, (rs, ss) in enumerate(parts)
+            for gs, rs, ss in _similar_runs(parts, sizes)
         ]
     )  # fmt: skip
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
@@ -307,6 +311,29 @@ class _Stack:
                 self.counts, row_ends, np.r_[0, sample_ends[:-1]], sample_ends, strict=True
             )
         ]
+
+
+#: Stable poses whose face counts lie within this ratio share a pass of the
+#: sample bounds (each row is padded to the most faces of its pass).
+SIMILAR_FACES = 2.0
+
+
+def _similar_runs(
+    parts: list[tuple[slice, slice]], sizes: list[int]
+) -> list[tuple[slice, slice, slice]]:
+    """Consecutive groups (`parts`: each one's rows and samples) whose face counts
+    `sizes` lie within `SIMILAR_FACES` of each other, merged: (groups, rows,
+    samples) of each run."""
+    runs, start, lo, hi = [], 0, sizes[0], sizes[0]
+    for j in range(1, len(parts) + 1):
+        if j < len(parts) and max(hi, sizes[j]) <= SIMILAR_FACES * min(lo, sizes[j]):
+            lo, hi = min(lo, sizes[j]), max(hi, sizes[j])
+            continue
+        rows = slice(parts[start][0].start, parts[j - 1][0].stop)
+        runs.append((slice(start, j), rows, slice(parts[start][1].start, parts[j - 1][1].stop)))
+        if j < len(parts):
+            start, lo, hi = j, sizes[j], sizes[j]
+    return runs
 
 
 def _joined_bounds(parts: list[SampleBounds]) -> SampleBounds:

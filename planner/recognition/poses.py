@@ -38,6 +38,7 @@ from planner.types import Faces, StablePose
 __all__ = [
     "FitBounds",
     "PoseFit",
+    "RowOutlines",
     "RowShapes",
     "SampleBounds",
     "SlideSamples",
@@ -164,6 +165,43 @@ class RowShapes:
 
 
 @dataclass(frozen=True, eq=False)
+class RowOutlines:
+    """What the sample bounds need of each row's stable pose (K rows): `points`
+    (K, 1 + F, 2) the model origin then every face's start (the outline's
+    vertices among them), `ends` (K, F) each face's end face
+    (:attr:`~planner.types.StablePose.face_ends`), `first` (K,) where the stable
+    pose's faces begin in the table the rows' face numbers index, and
+    `centroid_norm` (K,) the centroid's distance from the model origin. Stable
+    poses with fewer faces repeat their last face (its start again, itself as its
+    end): a largest move over the faces is the same, and no repeated face has two
+    bounds crossing along it."""
+
+    points: np.ndarray
+    ends: np.ndarray
+    first: np.ndarray
+    centroid_norm: np.ndarray
+
+    @classmethod
+    def of(
+        cls, stables: Sequence[StablePose], counts: Sequence[int], start: int = 0
+    ) -> RowOutlines:
+        """`counts[g]` rows of stable pose `stables[g]`, stacked in order; the
+        stable poses' faces stacked in the same order from `start` on."""
+        sizes = [len(p.all_faces.start) for p in stables]
+        most = max(sizes)
+        points = np.zeros((len(stables), 1 + most, 2))
+        ends = np.tile(np.arange(most), (len(stables), 1))
+        for g, (p, n) in enumerate(zip(stables, sizes, strict=True)):
+            points[g, 1 : 1 + n] = p.all_faces.start
+            points[g, 1 + n :] = p.all_faces.start[-1]
+            ends[g, :n] = p.face_ends
+        which = np.repeat(np.arange(len(stables)), counts)
+        first = start + np.cumsum([0, *sizes[:-1]])
+        norm = np.array([np.hypot(*p.centroid) for p in stables], dtype=float)
+        return cls(points[which], ends[which], first[which], norm[which])
+
+
+@dataclass(frozen=True, eq=False)
 class FitBounds:
     """Error bounds of each row's fit at slide coordinate 0 (K rows): `eps_t` the
     error-disk diameter (length), `d_theta` the rotation bound (radians), `margin`
@@ -215,7 +253,7 @@ def fit_bounds(
 
 
 def _face_moves(
-    stable: StablePose,
+    ends: np.ndarray,
     face: np.ndarray,
     assigned: np.ndarray,
     linear: np.ndarray,
@@ -224,29 +262,33 @@ def _face_moves(
     """(N, s, 2, 2) how far the start and the end of each contact's face may move,
     by each of the two bounds (`linear`, `consistent` (N, 1 + F): the origin, then
     every face's start; inf where a bound is not known): ``[n, j, bound, end]``.
-    Each bound is convex along a face, so values interpolated between its ends
-    bound its points (the smaller of the two taken end by end would not); 0 where
-    the contact is not assigned."""
+    `ends` (N, F) each face's end face (:attr:`~planner.types.StablePose.face_ends`
+    of the row's stable pose). Each bound is convex along a face, so values
+    interpolated between its ends bound its points (the smaller of the two taken
+    end by end would not); 0 where the contact is not assigned."""
     on = np.where(assigned, face, 0)
-    ends = np.stack([on, stable.face_ends[on]], axis=-1)  # (N, s, 2) vertex numbers
+    ends = np.stack([on, np.take_along_axis(ends, on, axis=1)], axis=-1)  # (N, s, 2) vertices
     rows = np.arange(len(face))[:, None, None]
     both = np.stack([linear[rows, 1 + ends], consistent[rows, 1 + ends]], axis=2)
     return np.where(assigned[..., None, None], both, 0.0)
 
 
-def _outline_move(stable: StablePose, linear: np.ndarray, consistent: np.ndarray) -> np.ndarray:
+def _outline_move(ends: np.ndarray, linear: np.ndarray, consistent: np.ndarray) -> np.ndarray:
     """(N,) how far any point of the outline may move: the smaller of the two bounds
     at every face's ends, and where the bounds cross along a face (each convex
-    along it, both interpolated), the value at the crossing."""
+    along it, both interpolated), the value at the crossing. `ends` (F,) or (N, F)
+    each face's end face."""
     lin, con = linear[:, 1:], consistent[:, 1:]
     farthest = np.minimum(lin, con).max(axis=1)
-    ends = stable.face_ends
+    ends = np.broadcast_to(ends, lin.shape)
     gap = lin - con  # -inf where the consistent bound is not known
-    cross = np.isfinite(gap) & np.isfinite(gap[:, ends]) & (gap * gap[:, ends] < 0)
+    at_end = np.take_along_axis(gap, ends, axis=1)
+    cross = np.isfinite(gap) & np.isfinite(at_end) & (gap * at_end < 0)
     if cross.any():
         n, f = np.nonzero(cross)
-        u = gap[n, f] / (gap[n, f] - gap[n, ends[f]])
-        value = lin[n, f] + u * (lin[n, ends[f]] - lin[n, f])
+        e = ends[n, f]
+        u = gap[n, f] / (gap[n, f] - gap[n, e])
+        value = lin[n, f] + u * (lin[n, e] - lin[n, f])
         np.maximum.at(farthest, n, value)
     return farthest
 
@@ -369,7 +411,8 @@ def sample_bounds(
     pose: PoseFit,
     bounds: FitBounds,
     samples: SlideSamples,
-    stable: StablePose,
+    outlines: RowOutlines,
+    faces: Faces,
     points: np.ndarray,
     normals: np.ndarray,
     face: np.ndarray,
@@ -383,17 +426,19 @@ def sample_bounds(
     the sample's slide coordinate and widened by half its cell; for determined
     poses in `linearized` mode, the smaller of those and the bounds of the set of
     poses consistent with the contacts
-    (:func:`planner.recognition.consistent.consistent_set_bounds`)."""
-    fit, faces = pose.fit, stable.all_faces
+    (:func:`planner.recognition.consistent.consistent_set_bounds`). The rows may
+    come from several stable poses (`outlines`, their faces stacked in `faces`,
+    which `face` (K, s) numbers): each row's bounds are those its own stable pose
+    alone gives."""
+    fit = pose.fit
     src, s_val, cell = samples.src, samples.s, samples.cell
     e, rho = pose.slide_axis, pose.rho
     eps_t0, d_th, second = bounds.eps_t, bounds.d_theta, bounds.second
-    # the model origin and every face's start (the outline's vertices among them)
-    origin_and_outline = np.vstack([[0.0, 0.0], faces.start])
     feasible = np.ones(len(src), dtype=bool)
     if config.bound_mode != "thesis":
+        # the model origin and every face's start (the outline's vertices among them)
         shift = (s_val / rho[src])[:, None, None] * e[src][:, None, :]
-        linear = point_bounds(fit, origin_and_outline[None] - shift, assigned, eps_d, phi, src)
+        linear = point_bounds(fit, outlines.points[src] - shift, assigned, eps_d, phi, src)
         linear = linear * (1 + phi) + second[src][:, None]
         consistent = np.full_like(linear, np.inf)  # known for determined poses only
         d_theta = d_th[src]
@@ -409,7 +454,7 @@ def sample_bounds(
                 assigned[det],
                 fit.theta[det],
                 fit.t[det],
-                origin_and_outline,
+                outlines.points[det],
                 eps_d,
                 phi,
             )
@@ -417,13 +462,15 @@ def sample_bounds(
             d_theta[at] = np.minimum(d_theta[at], found.dtheta[pos] + ANGLE_SLACK)
             # no pose keeps every contact within its bounds: the interpretation is out
             feasible[at] &= found.feasible[pos]
-        eps_t = 2 * _outline_move(stable, linear, consistent) + cell[src]
+        ends = outlines.ends[src]
+        eps_t = 2 * _outline_move(ends, linear, consistent) + cell[src]
         d_translation = np.minimum(linear[:, 0], consistent[:, 0]) + cell[src] / 2
-        face_move = _face_moves(stable, face[src], assigned[src], linear, consistent)
+        local = face[src] - outlines.first[src][:, None]
+        face_move = _face_moves(ends, local, assigned[src], linear, consistent)
         face_move += np.where(assigned[src], cell[src][:, None] / 2, 0.0)[..., None, None]
     else:
         eps_t = eps_t0[src] + cell[src]
-        d_translation = eps_t0[src] / 2 + np.hypot(*stable.centroid) * d_th[src] + cell[src] / 2
+        d_translation = eps_t0[src] / 2 + outlines.centroid_norm[src] * d_th[src] + cell[src] / 2
         d_theta = d_th[src]
         face_move = np.where(assigned[src], eps_t[:, None] / 2, 0.0)[..., None, None]
         face_move = np.repeat(np.repeat(face_move, 2, axis=2), 2, axis=3)

@@ -16,10 +16,11 @@ from hypothesis import strategies as st
 from hardware_sim.world import World, random_world
 from planner.geometry import LENGTH_SLACK, point_segment_distance, rotation_matrices, wrap_angle
 from planner.memo import SharedCache
+from planner.models.library import object_from_dict
 from planner.models.outlines import make_stable_pose
 from planner.recognition import tree
 from planner.recognition.config import RecognitionConfig
-from planner.recognition.evaluate import evaluate, evaluate_groups
+from planner.recognition.evaluate import _similar_runs, evaluate, evaluate_groups
 from planner.recognition.model_check import (
     contacts_on_faces,
     free_space_check,
@@ -27,6 +28,7 @@ from planner.recognition.model_check import (
     model_check,
 )
 from planner.recognition.poses import (
+    RowOutlines,
     RowShapes,
     fit_bounds,
     fit_poses,
@@ -103,7 +105,22 @@ def _steps(stable, obs, faces, bounds, length_scale, config=CONFIG):
         config.max_family_samples,
         length_scale,
     )
-    sb = sample_bounds(pose, fb, samples, stable, P, U, face, assigned, eps_d, phi, config, slack)
+    outlines = RowOutlines.of([stable], [len(face)])
+    sb = sample_bounds(
+        pose,
+        fb,
+        samples,
+        outlines,
+        stable.all_faces,
+        P,
+        U,
+        face,
+        assigned,
+        eps_d,
+        phi,
+        config,
+        slack,
+    )
     return pose, fb, samples, sb
 
 
@@ -640,6 +657,42 @@ def test_groups_evaluated_together_are_each_evaluated_alone_bit_for_bit(set_name
             np.testing.assert_array_equal(getattr(both, name), getattr(alone, name), err_msg=name)
 
 
+def _mixed_parts():
+    """A triangle, an L and a 24-gon: stable poses of 3, 6 and 24 faces (the first
+    two share a pass, padded to six faces; the third has its own)."""
+    ring = [[30 * math.cos(a), 30 * math.sin(a)] for a in np.arange(24) * math.pi / 12]
+    return [
+        object_from_dict({"name": "tri", "outline": [[0, 0], [50, 0], [10, 30]]}),
+        object_from_dict(
+            {"name": "ell", "outline": [[0, 0], [40, 0], [40, 12], [22, 12], [22, 30], [0, 30]]}
+        ),
+        object_from_dict({"name": "round", "outline": ring}),
+    ]
+
+
+@settings(max_examples=8, derandomize=True, deadline=None)
+@given(seed=st.integers(0, 2**32 - 1), touches=st.integers(1, 3))
+def test_stable_poses_of_unlike_face_counts_are_bounded_as_each_alone(seed, touches):
+    """The sample bounds run over consecutive stable poses of about as many faces
+    at once (each row padded to the most faces of its pass); poses of unlike face
+    counts run apart, and every group gets the numbers of a pass of its own."""
+    models = _mixed_parts()
+    groups, level, obs = _grown_tree(models, models, seed, touches)
+    together = evaluate_groups(groups, level.rows, obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
+    for g, both in enumerate(together):
+        alone = evaluate(g, groups[g], level.rows[g], obs, BOUNDS, WORKSPACE, CONFIG, 60.0)
+        for name in ("row", "theta", "t", "d_translation", "d_theta", "eps_t", "cell", "weight"):
+            np.testing.assert_array_equal(getattr(both, name), getattr(alone, name), err_msg=name)
+
+
+def test_similar_runs_merge_consecutive_groups_within_the_face_ratio():
+    parts = [(slice(r, r + 2), slice(2 * r, 2 * r + 3)) for r in range(0, 10, 2)]
+    runs = _similar_runs(parts, [6, 8, 3, 24, 20])
+    assert [(g.start, g.stop) for g, _, _ in runs] == [(0, 2), (2, 3), (3, 5)]
+    assert [(r.start, r.stop) for _, r, _ in runs] == [(0, 4), (4, 6), (6, 10)]
+    assert [(s.start, s.stop) for _, _, s in runs] == [(0, 7), (8, 11), (12, 19)]
+
+
 def test_shrunk_outlines_are_made_once_per_part_and_tolerance_for_the_process(monkeypatch):
     fresh = SharedCache(tree.SHRUNK_EDGES, lambda s: 1)
     monkeypatch.setattr(tree, "_shrunk", fresh)
@@ -676,7 +729,9 @@ def test_the_outline_bound_covers_where_two_bounds_cross_along_a_face():
     stable = SQUARE.stable_poses[0]
     linear = np.array([[0.0, 10.0, 2.0, 10.0, 2.0]])
     consistent = np.array([[0.0, 2.0, 10.0, 2.0, 10.0]])
-    assert _outline_move(stable, linear, consistent)[0] == pytest.approx(6.0)
+    assert _outline_move(stable.face_ends, linear, consistent)[0] == pytest.approx(6.0)
     # no crossing, or one bound unknown: the larger of the smaller end values
-    assert _outline_move(stable, linear, linear + 1)[0] == pytest.approx(10.0)
-    assert _outline_move(stable, linear, np.full_like(linear, np.inf))[0] == pytest.approx(10.0)
+    assert _outline_move(stable.face_ends, linear, linear + 1)[0] == pytest.approx(10.0)
+    assert _outline_move(stable.face_ends, linear, np.full_like(linear, np.inf))[
+        0
+    ] == pytest.approx(10.0)
