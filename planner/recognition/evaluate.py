@@ -30,7 +30,6 @@ from planner.geometry import LENGTH_SLACK, wrap_angle
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.model_check import free_space_check, inside_workspace, model_check
 from planner.recognition.poses import (
-    PoseFit,
     RowOutlines,
     RowShapes,
     SampleBounds,
@@ -235,13 +234,15 @@ def evaluate_groups(
         phi,
         slack,
     )
+    ok = _outline_checks(stack, observations, samples, bound, ok, workspace, config, eps_d, slack)
     fitness = np.ones(len(src))
-    for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):
-        ok[ss], fitness[ss] = _outline_checks(
-            group, observations, pose.part(rs), samples.part(rs, ss), bound.part(ss),
-            ok[ss], contacts, stack.local_faces[j], stack.assigned_parts[j],
-            workspace, config, eps_d, phi, slack,
-        )  # fmt: skip
+    if config.residual_fitness and config.bound_mode != "thesis":
+        for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):
+            fitness[ss] = residual_fitness(
+                group, observations, pose.part(rs), samples.part(rs, ss), P, U,
+                stack.local_faces[j], stack.assigned_parts[j], ok[ss], eps_d, phi, config,
+                slack, workspace if config.require_inside_workspace else None,
+            )  # fmt: skip
     prior = np.array([g.prior for g in stack.groups])[stack.group[src]]
     weight = weights(
         prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config,
@@ -346,33 +347,31 @@ def _joined_bounds(parts: list[SampleBounds]) -> SampleBounds:
 
 
 def _outline_checks(
-    group: Group,
+    stack: _Stack,
     observations: list[Observation],
-    pose: PoseFit,
     samples: SlideSamples,
     bound: SampleBounds,
     ok: np.ndarray,
-    contacts: _Contacts,
-    face: np.ndarray,
-    assigned: np.ndarray,
     workspace: Workspace,
     config: RecognitionConfig,
     eps_d: float,
-    phi: float,
     slack: float,
-) -> tuple[np.ndarray, np.ndarray]:
-    """Steps 5-7 that need one group's outline (its rows' own face numbers `face`,
-    `assigned` (K, s)): the safe circle and prior, the free space, and the residual
-    fitness; `ok` (N,) and the fitness of its samples."""
-    stable = group.stable
+) -> np.ndarray:
+    """Steps 5-6, which need each sample's outline: the safe circle and the prior,
+    and the free space; `ok` (N,) of the samples. The safe circle and the free
+    space take every group's samples in one pass."""
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
+    which = stack.group[src]
+    outlines = [g.stable.outline for g in stack.groups]
     if config.require_inside_workspace:
-        ok = ok & inside_workspace(stable.outline, theta, t, eps_t, workspace, slack)
+        ok = ok & inside_workspace(outlines, theta, t, eps_t, workspace, slack, which)
     if config.prior is not None:
-        ok = ok & within_prior(config.prior, stable, theta, t, bound, slack)
-    ok = free_space_check(group, observations, assigned[src], theta, t, eps_t, ok, eps_d, slack)
-    fitness = residual_fitness(
-        group, observations, pose, samples, contacts.points, contacts.normals, face, assigned,
-        ok, eps_d, phi, config, slack, workspace if config.require_inside_workspace else None,
-    )  # fmt: skip
-    return ok, fitness
+        ok = ok.copy()
+        for g, group in enumerate(stack.groups):
+            at = np.flatnonzero(which == g)
+            ok[at] &= within_prior(
+                config.prior, group.stable, theta[at], t[at], bound.part(at), slack
+            )
+    return free_space_check(
+        stack.groups, observations, stack.assigned[src], theta, t, eps_t, ok, eps_d, slack, which
+    )

@@ -15,6 +15,7 @@ model points v to ``R(theta) v + t``.
 from __future__ import annotations
 
 import math
+from collections.abc import Sequence
 
 import numba
 import numpy as np
@@ -190,34 +191,39 @@ def _on_faces(points, starts, ends, face, assigned, cos, sin, t, tol, out):  # t
 
 
 def inside_workspace(
-    outline: np.ndarray,
+    outline: np.ndarray | Sequence[np.ndarray],
     theta: np.ndarray,
     t: np.ndarray,
     eps_t: np.ndarray,
     workspace: Workspace,
     slack: float,
+    which: np.ndarray | None = None,
 ) -> np.ndarray:
     """(N,) does the posed `outline` (model frame, (V, 2)) lie inside the safe
     circle, within ``eps_t/2 + slack``, for each pose (`theta` (N,), `t` (N, 2))?
-    Only the poses whose disk around `t` holding the outline crosses the circle
-    have their vertices posed: a finely drawn part far from the rim costs one
-    distance."""
-    limit = workspace.radius + eps_t / 2 + slack
-    far = float(np.hypot(*np.asarray(outline, dtype=float).T).max())  # any rotation
+    Given several outlines, `which` (N,) names each pose's. Only the poses whose
+    disk around `t` holding the outline crosses the circle have their vertices
+    posed: a finely drawn part far from the rim costs one distance."""
+    outlines = [outline] if which is None else list(outline)
+    which = np.zeros(len(theta), np.int64) if which is None else np.asarray(which)
+    limit = np.broadcast_to(workspace.radius + eps_t / 2 + slack, np.shape(theta))
+    # each outline's farthest vertex from its origin: its reach at any rotation
+    far = np.array([np.hypot(*np.asarray(o, dtype=float).T).max() for o in outlines])[which]
     centre = np.hypot(*(t - np.asarray(workspace.center)).T)
     # the margin keeps rounding out of the shortcut: it answers as the vertices do
     margin = 1e-9 * (1.0 + np.abs(limit))
     out = centre + far <= limit - margin
     near = np.flatnonzero(~out & (centre - far <= limit + margin))
-    if near.size:
-        verts = rotate(rotation_matrices(theta[near]), outline) + t[near, None, :]
+    for g in np.unique(which[near]):
+        at = near[which[near] == g]
+        verts = rotate(rotation_matrices(theta[at]), outlines[g]) + t[at, None, :]
         reach = np.hypot(*(verts - np.asarray(workspace.center)).transpose(2, 0, 1)).max(1)
-        out[near] = reach <= (limit[near] if np.ndim(limit) else limit)
+        out[at] = reach <= limit[at]
     return out
 
 
 def free_space_check(
-    group: Group,
+    group: Group | Sequence[Group],
     observations: list[Observation],
     assigned: np.ndarray,
     theta: np.ndarray,
@@ -226,19 +232,23 @@ def free_space_check(
     keep: np.ndarray,
     eps_d: float,
     slack: float,
+    which: np.ndarray | None = None,
 ) -> np.ndarray:
     """`keep` (N,) and, for each pose (`theta` (N,), `t` (N, 2)), every path clear
     of the posed outline shrunk by ``eps_t/2 + slack``: up to each contact the
     sample assigns (`assigned` (N, s)), less ``eps_d + slack``, and each missed path
-    whole. Samples `keep` leaves out are not checked (they stay False)."""
+    whole. Samples `keep` leaves out are not checked (they stay False). Given
+    several groups, `which` (N,) names each pose's."""
     # free space: path up to each contact (less eps_d), and each missed path whole
     floor = max(slack, LENGTH_SLACK)
     shrink = eps_t / 2 + slack
-    return clear_paths(group, observations, assigned, theta, t, shrink, keep, eps_d + slack, floor)
+    return clear_paths(
+        group, observations, assigned, theta, t, shrink, keep, eps_d + slack, floor, which
+    )
 
 
 def clear_paths(
-    group: Group,
+    group: Group | Sequence[Group],
     observations: list[Observation],
     assigned: np.ndarray,
     theta: np.ndarray,
@@ -247,11 +257,15 @@ def clear_paths(
     keep: np.ndarray,
     back: float,
     floor: float,
+    which: np.ndarray | None = None,
 ) -> np.ndarray:
     """`keep` (N,) and, for each pose (`theta`, `t`, N rows), every path clear of
     the posed outline shrunk by `shrink`: up to each contact the row assigns
-    (`assigned` (N, s)), less `back`, and each missed path whole. Every (row, path)
-    pair is one segment of a single pass per path height and shrink."""
+    (`assigned` (N, s)), less `back`, and each missed path whole. Given several
+    groups, `which` (N,) names each row's. Every (row, path) pair is one segment
+    of a single pass per group, path height and shrink."""
+    groups = [group] if which is None else list(group)  # type: ignore[arg-type]
+    which = np.zeros(len(keep), np.int64) if which is None else np.asarray(which)
     keep = keep.copy()
     if not observations or not keep.any():
         return keep
@@ -261,7 +275,9 @@ def clear_paths(
     length = np.array([o.path.length for o in observations], dtype=float)
     points = np.array([o.contact.point if o.contact else (0.0, 0.0) for o in observations])
     length[hit] = np.einsum("ki,ki->k", points[hit] - origin[hit], direction[hit]) - back
-    layer = np.array([group.stable.layer_index(o.path.height) for o in observations])
+    # the layer of each group each path runs at
+    layer = np.array([[g.stable.layer_index(o.path.height) for o in observations] for g in groups])
+    layers = int(layer.max(initial=0)) + 1
     # which rows check which path: a missed path always, a contact's path where
     # the row assigns that contact to a face
     check = np.broadcast_to(~hit, (len(keep), len(observations))).copy()
@@ -276,12 +292,14 @@ def clear_paths(
         a = np.einsum("nji,nj->ni", R, origin[k] - t[i])
         b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
         segments = np.hstack([a, b])
-        # one pass per (height, shrink): the segments sorted by it and split
-        kinds, which = np.unique(layer[k] * steps + step[i], return_inverse=True)
-        ends = np.cumsum(np.bincount(which, minlength=len(kinds)))[:-1]
-        for kind, sel in zip(kinds, np.split(np.argsort(which), ends), strict=True):
-            z, n = divmod(int(kind), steps)
-            crossed = group.crossed(segments[sel], floor * _TOL_RATIO ** float(n), z)
+        # one pass per (group, height, shrink): the segments sorted by it and split
+        key = (which[i] * layers + layer[which[i], k]) * steps + step[i]
+        kinds, inverse = np.unique(key, return_inverse=True)
+        ends = np.cumsum(np.bincount(inverse, minlength=len(kinds)))[:-1]
+        for kind, sel in zip(kinds, np.split(np.argsort(inverse), ends), strict=True):
+            g_z, n = divmod(int(kind), steps)
+            g, z = divmod(g_z, layers)
+            crossed = groups[g].crossed(segments[sel], floor * _TOL_RATIO ** float(n), z)
             keep[i[sel[crossed]]] = False
     return keep
 
