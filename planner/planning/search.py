@@ -47,7 +47,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, unpack_bits
+from planner.planning.bitsets import (
+    SurvivorTable,
+    distinct_count,
+    pack_bits,
+    popcount,
+    unpack_bits,
+)
 from planner.planning.budget import Budget, OutOfBudgetError
 from planner.planning.peers import information_gain
 from planner.planning.search_nodes import Node, SearchSpace
@@ -284,9 +290,8 @@ class _Search:
             # every distinct child set is valued one touch deep: a search the budget
             # cannot pay for to the end is not begun (its caller would throw it away)
             children = node.child[order][node.open[order]]
-            if len(children) and self.budget.affordable("leaf_set") < len(
-                np.unique(children, axis=0)
-            ):
+            room = self.budget.affordable("leaf_set")
+            if room < len(children) and room < distinct_count(children):
                 return True
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0
