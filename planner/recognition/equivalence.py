@@ -97,6 +97,9 @@ PROBES = 8
 #: faces (a round part, whose rotations are all near one another, each pair dear),
 #: each leader decides its own, and no member of a class is measured again.
 PAIR_BATCH = 8
+#: Up to this many hypotheses every pair is measured, without the screen (its keys
+#: and trees cost more than the pairs themselves; the screen drops no pair that is close).
+SCREEN_FROM = 16
 #: Unit directions (every 30 degrees) of the support values that find candidate pairs.
 SUPPORT_DIRECTIONS = np.column_stack(
     [np.cos(np.arange(12) * np.pi / 6), np.sin(np.arange(12) * np.pi / 6)]
@@ -270,12 +273,16 @@ def equivalence_classes(
     group = np.repeat(np.arange(len(rings)), sizes)
     local = np.arange(n) - offsets[group]
     order = np.asarray(order, dtype=np.int64)
+    shape = np.zeros(n, dtype=np.int64) if shapes is None else np.asarray(shapes)[group]
+    ctx = _Leading(rings, group, local, family, shape, label, tau)
+    if n <= SCREEN_FROM:
+        # a handful (a plan's predicted sessions): every pair measured, no screen
+        ctx.lead_decided(order, np.column_stack(np.triu_indices(n, 1)))
+        return _numbered(label, order)
     first = int(order[0])
     keys = _screen_keys(rings, (int(group[first]), int(local[first])), tau)
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(keys).max()))
-    shape = np.zeros(n, dtype=np.int64) if shapes is None else np.asarray(shapes)[group]
-    ctx = _Leading(rings, group, local, family, shape, label, tau)
     # pairs first found in a few of the keys (a tree in all of them is slow), then
     # held to all: the same pairs as one tree over every key
     low = keys[:, FIRST_KEYS]
@@ -287,10 +294,15 @@ def equivalence_classes(
         ctx.lead_decided(order, found[_keys_within(keys, found, reach)])
     else:
         ctx.lead_lazily(order, cKDTree(keys), keys, reach)
+    return _numbered(label, order)
+
+
+def _numbered(label: np.ndarray, order: np.ndarray) -> np.ndarray:
+    """Each hypothesis' class from its leader (`label`, -1: it leads its own): the
+    classes numbered as their leaders come in `order` (a leader precedes its members)."""
     label[label < 0] = np.flatnonzero(label < 0)
-    # classes numbered as their leaders come in `order` (a leader precedes its members)
-    place = np.empty(n, dtype=np.int64)
-    place[order] = np.arange(n)
+    place = np.empty(len(label), dtype=np.int64)
+    place[order] = np.arange(len(label))
     return np.unique(place[label], return_inverse=True)[1].reshape(-1)
 
 

@@ -269,11 +269,13 @@ def _classes_without_filter(rings, order, family, tau):
     st.sampled_from([6, 24, 80]),
     st.booleans(),
     st.floats(0.1, 4.0),
+    st.sampled_from([4, 15]),
 )
-def test_the_candidate_filter_drops_no_pair_that_is_within(seed, n, hole, spread):
+def test_the_candidate_filter_drops_no_pair_that_is_within(seed, n, hole, spread, m):
     """Round outlines with an off-centre hole turned a little: the support values see
     nothing, the probe distances tell them apart; the classes must be those of
-    measuring every pair."""
+    measuring every pair (with `m` = 4 per outline, few enough that every pair is
+    measured without the filter; with 15, filtered)."""
     rng = np.random.default_rng(seed)
     ring = [
         [30 * math.cos(2 * math.pi * k / n), 30 * math.sin(2 * math.pi * k / n)] for k in range(n)
@@ -285,7 +287,6 @@ def test_the_candidate_filter_drops_no_pair_that_is_within(seed, n, hole, spread
     rings = []
     for shape in shapes:
         stable = object_from_dict(shape).stable_poses[0]
-        m = 15
         theta = rng.normal(0, 0.02 * spread, m) + rng.integers(0, n, m) * 2 * math.pi / n
         rings.append(PosedRings.of(stable, theta, rng.normal(0, 0.3 * spread, (m, 2))))
     total = sum(len(r) for r in rings)
