@@ -27,7 +27,6 @@ __all__ = [
     "SurvivorTable",
     "close_ends",
     "compact",
-    "distinct_count",
     "n_words",
     "one_hot",
     "pack_bits",
@@ -223,20 +222,6 @@ class SurvivorTable:
         # classes confusable with each class on every path (all, with no path)
         inseparable = np.bitwise_and.reduce(bits, axis=0) if len(bits) else everything
         return cls(bits=bits, weight=w / w.sum(), inseparable=inseparable & everything)
-
-
-def distinct_count(sets: np.ndarray) -> int:
-    """How many distinct sets (rows of words) `sets` (n, W) holds: one sort by every
-    word, then the rows that differ from the one before (a unique over rows views
-    each row as one opaque item, several times slower).
-
-    >>> distinct_count(np.array([[1, 2], [3, 0], [1, 2]], dtype=np.uint64))
-    2
-    """
-    if len(sets) < 2:
-        return len(sets)
-    ordered = sets[np.lexsort(sets.T[::-1])]
-    return 1 + int(np.any(ordered[1:] != ordered[:-1], axis=1).sum())
 
 
 def sorted_count(sorted_rows: np.ndarray, rows: np.ndarray, x: np.ndarray, side: str) -> np.ndarray:

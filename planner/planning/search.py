@@ -47,9 +47,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.arrays import distinct_rows
 from planner.planning.bitsets import (
     SurvivorTable,
-    distinct_count,
     pack_bits,
     popcount,
     unpack_bits,
@@ -291,7 +291,7 @@ class _Search:
             # cannot pay for to the end is not begun (its caller would throw it away)
             children = node.child[order][node.open[order]]
             room = self.budget.affordable("leaf_set")
-            if room < len(children) and room < distinct_count(children):
+            if room < len(children) and room < distinct_rows(children):
                 return True
         best: list[float] = []  # sorted exact objectives found so far
         lo = 0

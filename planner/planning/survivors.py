@@ -18,6 +18,7 @@ from collections.abc import Sequence
 
 import numpy as np
 
+from planner.arrays import row_labels
 from planner.geometry import ANGLE_SLACK, LENGTH_SLACK
 from planner.planning.candidates import Candidates
 from planner.planning.outcomes import Outcomes
@@ -63,8 +64,7 @@ def pin_families(
         ident.setdefault((h.interpretation, h.object, h.stable_pose), len(ident))
         for h in hypotheses
     ]
-    _, family = np.unique(np.column_stack([label, assigned]), axis=0, return_inverse=True)
-    family = np.where(parallel, family.ravel(), -1)
+    family = np.where(parallel, row_labels(np.column_stack([label, assigned])), -1)
     members = np.bincount(posed.cls, minlength=posed.n_classes)
     # classes of one hypothesis, sampled from a family with siblings
     solo = (members[posed.cls] == 1) & (family >= 0)

@@ -28,6 +28,7 @@ from typing import Literal
 
 import numpy as np
 
+from planner.arrays import row_labels
 from planner.errors import InvalidObservationError
 from planner.geometry import LENGTH_SLACK
 from planner.memo import cached_property
@@ -410,7 +411,7 @@ class Session:
             wide |= joined[label]
         if len(per_height) == 1:
             return per_height[0], wide
-        classes = np.unique(np.column_stack(per_height), axis=0, return_inverse=True)[1].ravel()
+        classes = row_labels(np.column_stack(per_height))
         return classes, wide
 
     def _stable(self, cands: PoseSamples, height: float | None) -> StablePose:
@@ -475,4 +476,4 @@ def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:
     """One label per hypothesis naming the interpretation (group, row) it was posed
     from: the samples of one slide family share it."""
     pairs = np.concatenate([np.column_stack([np.full(len(c.row), c.group), c.row]) for c in cands])
-    return np.unique(pairs, axis=0, return_inverse=True)[1].ravel()
+    return row_labels(pairs)

@@ -17,6 +17,7 @@ from dataclasses import dataclass
 import numpy as np
 import shapely
 
+from planner.arrays import row_labels
 from planner.memo import SharedCache, array_key, cached_property
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
@@ -181,10 +182,10 @@ def fold_runs(rows: np.ndarray, ring: np.ndarray, limit: int = FOLD_ROWS) -> np.
             continue
         # the rows alike but for this contact, by the face they name: a run of faces
         # each next to the one before (one ring) is one fold
-        _, group = np.unique(np.delete(rows[idx], c, axis=1), axis=0, return_inverse=True)
+        group = row_labels(np.delete(rows[idx], c, axis=1))
         f = face[idx]
-        order = np.lexsort((f, group.ravel()))
-        idx, g, f = idx[order], group.ravel()[order], f[order]
+        order = np.lexsort((f, group))
+        idx, g, f = idx[order], group[order], f[order]
         start = np.r_[
             True, (g[1:] != g[:-1]) | (f[1:] - f[:-1] > 1) | (ring[f[1:]] != ring[f[:-1]])
         ]
