@@ -84,11 +84,9 @@ def join_classes(
     by_class = np.lexsort((place, label))
     starts = np.searchsorted(label[by_class], np.arange(count + 1))
     leaders = by_class[starts[:-1]]
-    tree = cKDTree(support[leaders])
     # a margin for rounding: the filter must never drop a pair that passes
     reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
-    near = tree.query_pairs(reach, p=np.inf, output_type="ndarray")
-    near = near[np.lexsort((near[:, 1], near[:, 0]))]
+    near = _near_leaders(support[leaders], reach)
     size = np.diff(starts)
     points_of = np.add.reduceat(points[by_class], starts[:-1])
     apart = _apart_families(family, by_class, starts, near)
@@ -130,6 +128,23 @@ def _within_budget(cost: np.ndarray, budget: int) -> np.ndarray:
         if c <= left:
             keep[i], left = True, left - c
     return keep
+
+
+#: Up to this many classes every pair of leaders is screened directly (a tree
+#: costs more than the pairs).
+TREE_FROM = 16
+
+
+def _near_leaders(support: np.ndarray, reach: float) -> np.ndarray:
+    """(M, 2) the pairs i < j of leaders whose support values (C, K) all lie within
+    `reach` of each other, sorted: the tree's pairs, or every pair screened at once
+    for a few classes."""
+    if len(support) <= TREE_FROM:
+        i, j = np.triu_indices(len(support), 1)
+        near = np.column_stack([i, j])[np.abs(support[i] - support[j]).max(axis=1) <= reach]
+    else:
+        near = cKDTree(support).query_pairs(reach, p=np.inf, output_type="ndarray")
+    return near[np.lexsort((near[:, 1], near[:, 0]))]
 
 
 def _apart_families(
