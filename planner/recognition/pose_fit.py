@@ -59,20 +59,28 @@ def lifted_rows(
     `points`, `normals` (measured, world) and `face_normals` (model) are (..., 2),
     `face_offsets` (...): broadcast over interpretations and contacts.
     """
+    nx, ny = np.broadcast_arrays(face_normals[..., 0], face_normals[..., 1])
     px, py = points[..., 0], points[..., 1]
     ux, uy = normals[..., 0], normals[..., 1]
-    nx, ny = np.broadcast_arrays(face_normals[..., 0], face_normals[..., 1])
-    px, py, ux, uy = (np.broadcast_to(a, nx.shape) for a in (px, py, ux, uy))
-    zero = np.zeros_like(nx)
+    # filled in place: the same products and sums as stacking the rows, without the stacks
+    H = np.empty((*nx.shape, 3, 4))
     # n_a·(R^T p + b) = c (n·p) + s (nx py - ny px) + n·b
-    line = np.stack([nx * px + ny * py, nx * py - ny * px, nx, ny], -1)
-    # R^T u = (c ux + s uy, c uy - s ux)
-    ru1 = np.stack([ux, uy, zero, zero], -1)
-    ru2 = np.stack([uy, -ux, zero, zero], -1)
-    tangential = -ny[..., None] * ru1 + nx[..., None] * ru2
-    radial = nx[..., None] * ru1 + ny[..., None] * ru2
-    H = np.stack([line, tangential, radial], -2)
-    y = np.stack(np.broadcast_arrays(face_offsets, zero, zero + 1.0), -1)
+    H[..., 0, 0] = nx * px + ny * py
+    H[..., 0, 1] = nx * py - ny * px
+    H[..., 0, 2] = nx
+    H[..., 0, 3] = ny
+    # R^T u = (c ux + s uy, c uy - s ux): tangential -ny (ux, uy) + nx (uy, -ux), radial
+    # nx (ux, uy) + ny (uy, -ux), nothing on b (each product with zero kept, for its sign)
+    H[..., 1, 0] = -ny * ux + nx * uy
+    H[..., 1, 1] = -ny * uy + nx * -ux
+    H[..., 1, 2:] = (-ny * 0.0 + nx * 0.0)[..., None]
+    H[..., 2, 0] = nx * ux + ny * uy
+    H[..., 2, 1] = nx * uy + ny * -ux
+    H[..., 2, 2:] = (nx * 0.0 + ny * 0.0)[..., None]
+    y = np.empty((*nx.shape, 3))
+    y[..., 0] = face_offsets
+    y[..., 1] = 0.0
+    y[..., 2] = 1.0
     return H, y
 
 
@@ -81,15 +89,16 @@ def _row_derivatives(z: np.ndarray, normals: np.ndarray, face_normals: np.ndarra
     c, s = z[..., 0], z[..., 1]
     nx, ny = face_normals[..., 0], face_normals[..., 1]
     ux, uy = normals[..., 0], normals[..., 1]
-    zero = np.zeros(np.broadcast_shapes(nx.shape, c.shape))
+    E = np.zeros((*np.broadcast_shapes(nx.shape, c.shape), 3, 3))
     # line row: d/dp [c (n·p) + s (nx py - ny px)]
-    line = np.stack([c * nx - s * ny, c * ny + s * nx, zero], -1)
+    E[..., 0, 0] = c * nx - s * ny
+    E[..., 0, 1] = c * ny + s * nx
     # normal rows: du/dpsi = (-uy, ux)
     d1 = -c * uy + s * ux
     d2 = c * ux + s * uy
-    tangential = np.stack([zero, zero, -ny * d1 + nx * d2], -1)
-    radial = np.stack([zero, zero, nx * d1 + ny * d2], -1)
-    return np.stack([line, tangential, radial], -2)
+    E[..., 1, 2] = -ny * d1 + nx * d2
+    E[..., 2, 2] = nx * d1 + ny * d2
+    return E
 
 
 @dataclass(frozen=True, eq=False)
