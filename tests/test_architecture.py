@@ -21,7 +21,7 @@ GENERATED = ROOT / "hardware_sim" / "api_client"
 #: layers only. `planner.recognition` and `planner.image` stand side by side and do
 #: not import each other.
 LAYERS: tuple[tuple[str, ...], ...] = (
-    ("planner.errors", "planner.geometry", "planner.memo", "planner.compiled"),
+    ("planner.errors", "planner.geometry", "planner.memo", "planner.compiled", "planner.arrays"),
     ("planner.types",),
     ("planner.models",),
     ("planner.recognition", "planner.image"),
