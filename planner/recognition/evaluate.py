@@ -41,7 +41,7 @@ from planner.recognition.poses import (
     slide_samples,
 )
 from planner.recognition.tree import Group
-from planner.recognition.weights import residual_fitness, weights
+from planner.recognition.weights import residual_fitness_of_groups, weights
 from planner.types import Faces, Observation, PosePrior, SensorBounds, StablePose, Workspace
 
 __all__ = ["PoseSamples", "evaluate", "evaluate_groups"]
@@ -247,14 +247,11 @@ def evaluate_groups(
         slack,
     )
     ok = _outline_checks(stack, observations, samples, bound, ok, workspace, config, eps_d, slack)
-    fitness = np.ones(len(src))
-    if config.residual_fitness and config.bound_mode != "thesis":
-        for j, (group, (rs, ss)) in enumerate(zip(stack.groups, parts, strict=True)):
-            fitness[ss] = residual_fitness(
-                group, observations, pose.part(rs), samples.part(rs, ss), P, U,
-                stack.local_faces[j], stack.assigned_parts[j], ok[ss], eps_d, phi, config,
-                slack, workspace if config.require_inside_workspace else None,
-            )  # fmt: skip
+    fitness = residual_fitness_of_groups(
+        stack.groups, parts, stack.faces, observations, pose, samples, P, U, stack.face,
+        stack.assigned, ok, eps_d, phi, config, slack,
+        workspace if config.require_inside_workspace else None,
+    )  # fmt: skip
     prior = np.array([g.prior for g in stack.groups])[stack.group[src]]
     weight = weights(
         prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config,

@@ -12,6 +12,8 @@ share of the poses consistent with them that the errors left
 
 from __future__ import annotations
 
+from collections.abc import Sequence
+
 import numpy as np
 
 from planner.geometry import LENGTH_SLACK, rotation_matrices
@@ -22,7 +24,7 @@ from planner.recognition.poses import PoseFit, SlideSamples, determined_rows
 from planner.recognition.tree import Group
 from planner.types import Faces, Observation, Workspace
 
-__all__ = ["residual_fitness", "weights"]
+__all__ = ["residual_fitness", "residual_fitness_of_groups", "weights"]
 
 #: Least share of the consistent set a determined pose keeps in its weight.
 _FITNESS_FLOOR = 1e-6
@@ -56,43 +58,68 @@ def residual_fitness(
     leaves it out (a prediction). `face`, `assigned` (K, s) are the rows the
     samples were drawn from.
     """
-    fit, faces = pose.fit, group.stable.all_faces
-    src = samples.src
-    fitness = np.ones(len(src))  # determined poses: share of the consistent set the errors left
-    det, at, pos = determined_rows(fit, src)
-    if config.bound_mode == "thesis" or not config.residual_fitness or det.size == 0:
+    parts = [(slice(0, len(face)), slice(0, len(samples.src)))]
+    return residual_fitness_of_groups(
+        [group], parts, group.stable.all_faces, observations, pose, samples, points, normals,
+        face, assigned, ok, eps_d, phi, config, slack, workspace,
+    )  # fmt: skip
+
+
+def residual_fitness_of_groups(
+    groups: Sequence[Group],
+    parts: Sequence[tuple[slice, slice]],
+    faces: Faces,
+    observations: list[Observation],
+    pose: PoseFit,
+    samples: SlideSamples,
+    points: np.ndarray,
+    normals: np.ndarray,
+    face: np.ndarray,
+    assigned: np.ndarray,
+    ok: np.ndarray,
+    eps_d: float,
+    phi: float,
+    config: RecognitionConfig,
+    slack: float,
+    workspace: Workspace | None = None,
+) -> np.ndarray:
+    """:func:`residual_fitness` of the rows of several groups: `parts` each one's
+    rows and samples, in order, `faces` the groups' faces stacked in that order,
+    which `face` (K, s) numbers. The consistent sets' volumes and spread poses are
+    measured group by group (their polygons are padded to the most slabs of a
+    pass, and that padding decides their last bits); the share of the spread
+    poses the checks admit, for every group at once."""
+    fitness = np.ones(len(samples.src))  # determined poses: share of the set the errors left
+    if config.bound_mode == "thesis" or not config.residual_fitness:
         return fitness
-    fitness[at] = _fitness(
-        points, normals, faces, face[det], assigned[det], fit.theta[det], fit.t[det], eps_d, phi
-    )[pos]
-    # determined poses: the share of their consistent set that also keeps every
-    # contact on its finite face and every path clear of the outline, exactly
-    live = np.flatnonzero(ok[at])
-    if live.size:
-        # poses spread over each determined row's consistent set
-        spread = consistent_poses(
-            points,
-            normals,
-            faces.normal[face[det]],
-            faces.offset[face[det]],
-            assigned[det],
-            fit.theta[det],
-            eps_d,
-            phi,
-        )
-        fitness[at[live]] *= _admitted_share(
-            group,
-            observations,
-            points,
-            face[src[at[live]]],
-            assigned[src[at[live]]],
-            spread[0][pos[live]],
-            spread[1][pos[live]],
-            spread[2][pos[live]],
-            eps_d,
-            max(slack, LENGTH_SLACK),
-            workspace,
-        )
+    found: list[tuple[int, np.ndarray, tuple[np.ndarray, ...]]] = []
+    for g, (rs, ss) in enumerate(parts):
+        fit = pose.part(rs).fit
+        det, at, pos = determined_rows(fit, samples.src[ss] - rs.start)
+        if det.size == 0:
+            continue
+        f, a, theta = face[rs][det], assigned[rs][det], fit.theta[det]
+        fitness[ss.start + at] = _fitness(
+            points, normals, faces, f, a, theta, fit.t[det], eps_d, phi
+        )[pos]
+        # determined poses: the share of their consistent set that also keeps every
+        # contact on its finite face and every path clear of the outline, exactly
+        live = np.flatnonzero(ok[ss][at])
+        if live.size:
+            # poses spread over each determined row's consistent set
+            spread = consistent_poses(
+                points, normals, faces.normal[f], faces.offset[f], a, theta, eps_d, phi
+            )
+            found.append((g, ss.start + at[live], tuple(x[pos[live]] for x in spread)))
+    if found:
+        at = np.concatenate([x[1] for x in found])
+        which = np.concatenate([np.full(len(x[1]), x[0]) for x in found])
+        theta, t, valid = (np.concatenate([x[2][k] for x in found]) for k in range(3))
+        rows = samples.src[at]
+        fitness[at] *= _admitted_share(
+            groups, which, observations, points, faces, face[rows], assigned[rows], theta, t,
+            valid, eps_d, max(slack, LENGTH_SLACK), workspace,
+        )  # fmt: skip
     return fitness
 
 
@@ -167,9 +194,11 @@ def _fitness(
 
 
 def _admitted_share(
-    group: Group,
+    groups: Sequence[Group],
+    which: np.ndarray,
     observations: list[Observation],
     P: np.ndarray,
+    faces: Faces,
     face: np.ndarray,
     assigned: np.ndarray,
     theta: np.ndarray,
@@ -181,22 +210,23 @@ def _admitted_share(
 ) -> np.ndarray:
     """(K,) share of the poses spread over each row's consistent set (`theta`,
     `t`, `valid`: (K, M), (K, M, 2), (K, M)) whose contacts lie within eps_d of
-    their FINITE faces, whose paths (up to each contact less eps_d, or whole
-    when missed) stay out of the outline and, given the `workspace`, whose
+    their FINITE faces (`face` numbering `faces`), whose paths (up to each
+    contact less eps_d, or whole when missed) stay out of the outline of the
+    row's group (`which` (K,) into `groups`) and, given the `workspace`, whose
     outline lies inside the safe circle: the model check without the pose's
     error allowance. It weighs, it does not prune (at least `_FITNESS_FLOOR`;
     1 where no pose is spread)."""
     K, M = valid.shape
-    faces = group.stable.all_faces
     good = valid & contacts_on_faces(P, faces, face, assigned, theta, t, eps_d + floor)
+    each = np.repeat(which, M)
     if workspace is not None:
+        outlines = [g.stable.outline for g in groups]
         inside = inside_workspace(
-            group.stable.outline, theta.reshape(-1), t.reshape(-1, 2), np.zeros(K * M),
-            workspace, floor,
-        )  # fmt: skip
+            outlines, theta.reshape(-1), t.reshape(-1, 2), np.zeros(K * M), workspace, floor, each
+        )
         good &= inside.reshape(K, M)
     clear = clear_paths(
-        group,
+        groups,
         observations,
         np.repeat(assigned, M, axis=0),
         theta.reshape(-1),
@@ -205,6 +235,7 @@ def _admitted_share(
         good.reshape(-1),
         eps_d,
         floor,
+        each,
     )
     good = clear.reshape(K, M)
     count = valid.sum(axis=1)
