@@ -180,12 +180,13 @@ def evaluate_groups(
     indices: Sequence[int] | None = None,
 ) -> list[PoseSamples]:
     """:func:`evaluate` of every group (its `rows` each, numbered by `indices`,
-    default their places). The steps that treat each row on its own (the fit, its
-    bounds, the slide samples, the model check, the weights) run over the rows of
-    all groups in one pass, face numbers moved into one table; the steps that
-    depend on a group's outline or measure a group's rows together (the consistent
-    sets, the free space) run group by group. Each row gets the numbers a pass
-    over its group alone gives."""
+    default their places). The rotation gate, the fit, its bounds, the slide
+    samples, the model check, the safe circle, the free space and the weights run
+    over the rows of all groups in one pass, face numbers moved into one table;
+    the sample bounds over consecutive groups of about as many faces (each row
+    padded with its own outline's copies); the consistent sets' volumes and spread
+    poses group by group (their polygons' padding decides their last bits). Each
+    row gets the numbers a pass over its group alone gives."""
     indices = range(len(groups)) if indices is None else indices
     out = [_no_samples(g) for g in indices]
     if all(o.contact is None for o in observations):
