@@ -1,10 +1,12 @@
 """Poses of interpretations: rotation gate, pose fit, error bounds and slide-family
 samples (DESIGN §4.4, §4.6).
 
-Each step works on the K surviving rows of one group (a stable pose of an object)
-at once: `face` (K, s) the face each row assigns to each of the s contacts (0
-where spurious), `assigned` (K, s) which contacts it assigns; `points`, `normals`
-(s, 2) the measured contacts (world frame).
+Each step works on K surviving rows at once, of one group (a stable pose of an
+object) or of several with their faces in one table (:class:`RowShapes`,
+:class:`RowOutlines` say which stable pose each row has): `face` (K, s) the face
+each row assigns to each of the s contacts (0 where spurious), `assigned` (K, s)
+which contacts it assigns; `points`, `normals` (s, 2) the measured contacts
+(world frame).
 
 Interpretations whose faces are all parallel leave the translation free along
 the faces: the family's feasible slide interval is sampled at a spacing of about
