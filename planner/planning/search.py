@@ -48,12 +48,7 @@ from dataclasses import dataclass
 import numpy as np
 
 from planner.arrays import distinct_rows
-from planner.planning.bitsets import (
-    SurvivorTable,
-    pack_bits,
-    popcount,
-    unpack_bits,
-)
+from planner.planning.bitsets import SurvivorTable, pack_bits, popcount, unpack_bits
 from planner.planning.budget import Budget, OutOfBudgetError
 from planner.planning.peers import information_gain
 from planner.planning.search_nodes import Node, SearchSpace

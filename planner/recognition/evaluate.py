@@ -41,7 +41,7 @@ from planner.recognition.poses import (
     slide_samples,
 )
 from planner.recognition.tree import Group
-from planner.recognition.weights import residual_fitness_of_groups, weights
+from planner.recognition.weights import residual_fitness, weights
 from planner.types import Faces, Observation, PosePrior, SensorBounds, StablePose, Workspace
 
 __all__ = ["PoseSamples", "evaluate", "evaluate_groups"]
@@ -248,7 +248,7 @@ def evaluate_groups(
         slack,
     )
     ok = _outline_checks(stack, observations, samples, bound, ok, workspace, config, eps_d, slack)
-    fitness = residual_fitness_of_groups(
+    fitness = residual_fitness(
         stack.groups, parts, stack.faces, observations, pose, samples, P, U, stack.face,
         stack.assigned, ok, eps_d, phi, config, slack,
         workspace if config.require_inside_workspace else None,

@@ -24,14 +24,16 @@ from planner.recognition.poses import PoseFit, SlideSamples, determined_rows
 from planner.recognition.tree import Group
 from planner.types import Faces, Observation, Workspace
 
-__all__ = ["residual_fitness", "residual_fitness_of_groups", "weights"]
+__all__ = ["residual_fitness", "weights"]
 
 #: Least share of the consistent set a determined pose keeps in its weight.
 _FITNESS_FLOOR = 1e-6
 
 
 def residual_fitness(
-    group: Group,
+    groups: Sequence[Group],
+    parts: Sequence[tuple[slice, slice]],
+    faces: Faces,
     observations: list[Observation],
     pose: PoseFit,
     samples: SlideSamples,
@@ -54,41 +56,16 @@ def residual_fitness(
     which also keeps every contact on its finite face, every path clear of the
     outline and, given the `workspace`, the part inside the safe circle (the
     prior puts it there: a set mostly outside it is mostly impossible). 1 for
-    slide-family samples, in `thesis` mode and where the `config`
-    leaves it out (a prediction). `face`, `assigned` (K, s) are the rows the
-    samples were drawn from.
-    """
-    parts = [(slice(0, len(face)), slice(0, len(samples.src)))]
-    return residual_fitness_of_groups(
-        [group], parts, group.stable.all_faces, observations, pose, samples, points, normals,
-        face, assigned, ok, eps_d, phi, config, slack, workspace,
-    )  # fmt: skip
+    slide-family samples, in `thesis` mode and where the `config` leaves it out
+    (a prediction).
 
-
-def residual_fitness_of_groups(
-    groups: Sequence[Group],
-    parts: Sequence[tuple[slice, slice]],
-    faces: Faces,
-    observations: list[Observation],
-    pose: PoseFit,
-    samples: SlideSamples,
-    points: np.ndarray,
-    normals: np.ndarray,
-    face: np.ndarray,
-    assigned: np.ndarray,
-    ok: np.ndarray,
-    eps_d: float,
-    phi: float,
-    config: RecognitionConfig,
-    slack: float,
-    workspace: Workspace | None = None,
-) -> np.ndarray:
-    """:func:`residual_fitness` of the rows of several groups: `parts` each one's
-    rows and samples, in order, `faces` the groups' faces stacked in that order,
-    which `face` (K, s) numbers. The consistent sets' volumes and spread poses are
-    measured group by group (their polygons are padded to the most slabs of a
-    pass, and that padding decides their last bits); the share of the spread
-    poses the checks admit, for every group at once."""
+    The rows come from `groups`: `parts` gives each one's rows and samples, in
+    order; `faces` holds the groups' faces stacked in that order, which `face`,
+    `assigned` (K, s), the rows the samples were drawn from, number. The
+    consistent sets' volumes and spread poses are measured group by group (their
+    polygons are padded to the most slabs of a pass, and that padding decides
+    their last bits); the share of the spread poses the checks admit, for every
+    group at once."""
     fitness = np.ones(len(samples.src))  # determined poses: share of the set the errors left
     if config.bound_mode == "thesis" or not config.residual_fitness:
         return fitness

@@ -531,8 +531,10 @@ def _square_fitness(observations, config=CONFIG, workspace=None):
     P, U, _, _ = _arrays(observations)
     eps_d, phi = BOUNDS.position_error, BOUNDS.normal_error
     ok = np.ones(len(samples.src), bool)
+    parts = [(slice(0, len(face)), slice(0, len(samples.src)))]
     args = (pose, samples, P, U, face, assigned, ok, eps_d, phi, config, _slack(10.0), workspace)
-    return residual_fitness(SQUARE_GROUP, observations, *args)
+    faces = SQUARE_GROUP.stable.all_faces
+    return residual_fitness([SQUARE_GROUP], parts, faces, observations, *args)
 
 
 def test_weights_carry_the_incidence_of_each_hit():
