@@ -28,7 +28,12 @@ import numpy as np
 
 from planner.geometry import LENGTH_SLACK, wrap_angle
 from planner.recognition.config import RecognitionConfig
-from planner.recognition.model_check import free_space_check, inside_workspace, model_check
+from planner.recognition.model_check import (
+    PathVariants,
+    free_space_check,
+    inside_workspace,
+    model_check,
+)
 from planner.recognition.poses import (
     RowOutlines,
     RowShapes,
@@ -44,7 +49,7 @@ from planner.recognition.tree import Group
 from planner.recognition.weights import residual_fitness, weights
 from planner.types import Faces, Observation, PosePrior, SensorBounds, StablePose, Workspace
 
-__all__ = ["PoseSamples", "evaluate", "evaluate_groups"]
+__all__ = ["PoseSamples", "Variants", "evaluate", "evaluate_groups"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -109,9 +114,21 @@ def evaluate(
 
 
 @dataclass(frozen=True, eq=False)
+class Variants:
+    """Observation lists alike but for their last observation, evaluated in one pass
+    (a plan's predictions: :meth:`~planner.recognition.session.Session.predict_many`):
+    `last` (B,) each list's last observation (every one a contact), `of_rows` per
+    group which list each of its rows observes."""
+
+    last: Sequence[Observation]
+    of_rows: Sequence[np.ndarray]
+
+
+@dataclass(frozen=True, eq=False)
 class _Contacts:
     """The contacts of the observations (s of them): `points`, `normals` (s, 2), the
-    normals' angles `psi` (s,) and the `directions` (s, 2) of the paths that met them."""
+    normals' angles `psi` (s,) and the `directions` (s, 2) of the paths that met
+    them; given variants, each row's own: (K, s, 2) and (K, s)."""
 
     points: np.ndarray
     normals: np.ndarray
@@ -119,7 +136,11 @@ class _Contacts:
     directions: np.ndarray
 
     @classmethod
-    def of(cls, observations: list[Observation]) -> _Contacts:
+    def of(cls, observations: list[Observation], variants: Variants | None = None) -> _Contacts:
+        if variants is not None:
+            lists = [cls.of([*observations, o]) for o in variants.last]
+            row = np.concatenate(variants.of_rows).astype(np.int64)
+            return cls(*(np.stack([getattr(c, f) for c in lists])[row] for f in _FIELDS))
         contacts = [o.contact for o in observations if o.contact is not None]
         normals = np.array([c.normal for c in contacts])
         return cls(
@@ -129,25 +150,42 @@ class _Contacts:
             np.array([o.path.direction for o in observations if o.contact is not None]),
         )
 
+    @property
+    def shared(self) -> bool:
+        """One set of contacts for every row."""
+        return self.psi.ndim == 1
+
+    def rows(self, at: np.ndarray | slice) -> _Contacts:
+        """The contacts of some rows (all of them, when shared)."""
+        if self.shared:
+            return self
+        return _Contacts(*(getattr(self, f)[at] for f in _FIELDS))
+
+
+_FIELDS = ("points", "normals", "psi", "directions")
+
 
 @dataclass(frozen=True, eq=False)
 class _Gated:
     """The rows of one group that assign a contact and pass the rotation gate:
     `keep` their indices among the group's rows, `face` and `assigned` (K, s), and
     `spurious` (K, s) the contacts they call spurious (a folded contact is unassigned
-    but not spurious: :func:`~planner.recognition.tree.fold_runs`)."""
+    but not spurious: :func:`~planner.recognition.tree.fold_runs`), and `at` (K,)
+    their places among the rows of every group, stacked."""
 
     keep: np.ndarray
     face: np.ndarray
     assigned: np.ndarray
     spurious: np.ndarray
+    at: np.ndarray
 
 
 def _gated(
     groups: Sequence[Group], rows: Sequence[np.ndarray], psi: np.ndarray, phi: float
 ) -> list[_Gated | None]:
     """Step 1's gate on every group's `rows` in one pass: per group its rows that
-    assign a contact and pass it (None when no row is left)."""
+    assign a contact and pass it (None when no row is left). `psi` (s,), or (K, s)
+    for every row of the groups stacked."""
     out: list[_Gated | None] = [None] * len(groups)
     sizes = [len(r) if r.size else 0 for r in rows]
     if not sum(sizes):
@@ -164,7 +202,7 @@ def _gated(
         keep = np.flatnonzero(gate[start : start + n])
         if keep.size:
             at = keep + start
-            out[g] = _Gated(keep, face[at], assigned[at], every[at] == -1)
+            out[g] = _Gated(keep, face[at], assigned[at], every[at] == -1, at)
         start += n
     return out
 
@@ -178,6 +216,7 @@ def evaluate_groups(
     config: RecognitionConfig,
     length_scale: float,
     indices: Sequence[int] | None = None,
+    variants: Variants | None = None,
 ) -> list[PoseSamples]:
     """:func:`evaluate` of every group (its `rows` each, numbered by `indices`,
     default their places). The rotation gate, the fit, its bounds, the slide
@@ -186,20 +225,27 @@ def evaluate_groups(
     the sample bounds over consecutive groups of about as many faces (each row
     padded with its own outline's copies); the consistent sets' volumes and spread
     poses group by group (their polygons' padding decides their last bits). Each
-    row gets the numbers a pass over its group alone gives."""
+    row gets the numbers a pass over its group alone gives.
+
+    Given `variants`, each row observes `observations` and then its variant's last
+    observation, and gets the numbers a pass over its own observations gives (the
+    residual fitness, which a prediction leaves out, is not run)."""
     indices = range(len(groups)) if indices is None else indices
     out = [_no_samples(g) for g in indices]
-    if all(o.contact is None for o in observations):
+    if variants is None and all(o.contact is None for o in observations):
         return out
-    contacts = _Contacts.of(observations)
-    P, U, psi = contacts.points, contacts.normals, contacts.psi
+    if variants is not None and config.residual_fitness and config.bound_mode != "thesis":
+        raise ValueError("observation variants are evaluated without the residual fitness")
+    contacts = _Contacts.of(observations, variants)
     eps_d, phi = bounds.position_error, bounds.normal_error
     slack = LENGTH_SLACK * length_scale * 10
-    gated = _gated(groups, rows, psi, phi)
+    gated = _gated(groups, rows, contacts.psi, phi)
     live = [k for k, x in enumerate(gated) if x is not None]
     if not live:
         return out
     stack = _Stack.of([groups[k] for k in live], [gated[k] for k in live])  # type: ignore[misc]
+    contacts = contacts.rows(stack.at)
+    P, U = contacts.points, contacts.normals
     stables = [g.stable for g in stack.groups]
     pose = fit_poses_of_groups(
         stables, P, U, stack.local_faces, stack.assigned_parts, eps_d, phi, length_scale
@@ -226,7 +272,8 @@ def evaluate_groups(
             sample_bounds(
                 pose.part(rs), fit_bound.part(rs), samples.part(rs, ss),
                 RowOutlines.of(stables[gs], stack.counts[gs], sum(sizes[: gs.start])),
-                stack.faces, P, U, face[rs], assigned[rs], eps_d, phi, config, slack,
+                stack.faces, contacts.rows(rs).points, contacts.rows(rs).normals, face[rs],
+                assigned[rs], eps_d, phi, config, slack,
             )
             for gs, rs, ss in _similar_runs(parts, sizes)
         ]
@@ -234,20 +281,12 @@ def evaluate_groups(
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
     f_src, a_src = face[src], assigned[src]
     ok = bound.feasible & model_check(
-        stack.faces,
-        f_src,
-        a_src,
-        P,
-        psi,
-        theta,
-        t,
-        bound.face_move,
-        bound.d_theta,
-        eps_d,
-        phi,
-        slack,
+        stack.faces, f_src, a_src, contacts.rows(src).points, contacts.rows(src).psi, theta, t,
+        bound.face_move, bound.d_theta, eps_d, phi, slack,
+    )  # fmt: skip
+    ok = _outline_checks(
+        stack, observations, samples, bound, ok, workspace, config, eps_d, slack, variants
     )
-    ok = _outline_checks(stack, observations, samples, bound, ok, workspace, config, eps_d, slack)
     fitness = residual_fitness(
         stack.groups, parts, stack.faces, observations, pose, samples, P, U, stack.face,
         stack.assigned, ok, eps_d, phi, config, slack,
@@ -255,7 +294,8 @@ def evaluate_groups(
     )  # fmt: skip
     prior = np.array([g.prior for g in stack.groups])[stack.group[src]]
     weight = weights(
-        prior, pose, samples, stack.faces, f_src, a_src, contacts.directions, fitness, config,
+        prior, pose, samples, stack.faces, f_src, a_src, contacts.rows(src).directions, fitness,
+        config,
         stack.spurious[src],
     )  # fmt: skip
     keep = stack.keep[src]
@@ -273,7 +313,8 @@ class _Stack:
     """The gated rows of several groups stacked in group order (K rows): each
     group's faces in one table (`faces`, the group's face numbers moved past the
     faces of the groups before it: `face` (K, s)), `assigned` and `spurious` (K, s),
-    `keep` (K,) each row's index among its group's rows, `group` (K,) its place in `groups`;
+    `keep` (K,) each row's index among its group's rows, `group` (K,) its place in `groups`,
+    `at` (K,) its place among the rows of every group, stacked;
     per group its rows' `counts`, its own face numbers and assignments."""
 
     groups: list[Group]
@@ -286,6 +327,7 @@ class _Stack:
     spurious: np.ndarray
     keep: np.ndarray
     group: np.ndarray
+    at: np.ndarray
 
     @classmethod
     def of(cls, groups: list[Group], gated: list[_Gated]) -> _Stack:
@@ -309,6 +351,7 @@ class _Stack:
             np.concatenate([x.spurious for x in gated]),
             np.concatenate([x.keep for x in gated]),
             np.repeat(np.arange(len(groups)), counts),
+            np.concatenate([x.at for x in gated]),
         )
 
     def parts(self, src: np.ndarray) -> list[tuple[slice, slice]]:
@@ -366,10 +409,12 @@ def _outline_checks(
     config: RecognitionConfig,
     eps_d: float,
     slack: float,
+    variants: Variants | None = None,
 ) -> np.ndarray:
     """Steps 5-6, which need each sample's outline: the safe circle and the prior,
-    and the free space; `ok` (N,) of the samples. The safe circle and the free
-    space take every group's samples in one pass."""
+    and the free space (each sample's own last path, given `variants`); `ok` (N,) of
+    the samples. The safe circle and the free space take every group's samples in
+    one pass."""
     src, theta, t, eps_t = samples.src, samples.theta, samples.t, bound.eps_t
     which = stack.group[src]
     outlines = [g.stable.outline for g in stack.groups]
@@ -382,6 +427,10 @@ def _outline_checks(
             ok[at] &= within_prior(
                 config.prior, group.stable, theta[at], t[at], bound.part(at), slack
             )
+    paths = None
+    if variants is not None:
+        paths = PathVariants(variants.last, np.concatenate(variants.of_rows)[stack.at][src])
     return free_space_check(
-        stack.groups, observations, stack.assigned[src], theta, t, eps_t, ok, eps_d, slack, which
-    )
+        stack.groups, observations, stack.assigned[src], theta, t, eps_t, ok, eps_d, slack, which,
+        paths,
+    )  # fmt: skip

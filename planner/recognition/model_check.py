@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Sequence
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -33,6 +34,7 @@ from planner.recognition.tree import Group
 from planner.types import Faces, Observation, Workspace
 
 __all__ = [
+    "PathVariants",
     "clear_paths",
     "contacts_on_faces",
     "free_space_check",
@@ -59,7 +61,8 @@ def model_check(
     slack: float,
 ) -> np.ndarray:
     """(N,) does every assigned contact fit its posed face? Each contact (`points`
-    (s, 2), measured normal angles `psi` (s,)) within ``eps_d + slack`` plus how
+    (s, 2), measured normal angles `psi` (s,); or (N, s, 2) and (N, s), each
+    sample's own) within ``eps_d + slack`` plus how
     far its posed FINITE face may have moved of that face (the segment, not its
     line), and its normal within ``phi + d_theta`` of the face's posed normal.
 
@@ -76,7 +79,7 @@ def model_check(
     ok = np.ones(len(theta), dtype=bool)
     posed = _compiled_inputs(points, faces, face, assigned, theta, t)
     _on_moved_faces(*posed, c_array(face_move, dtype=float), float(eps_d + slack), ok)
-    ang = np.abs(wrap_angle(psi[None, :] - theta[:, None] - faces.angle[face]))
+    ang = np.abs(wrap_angle(np.atleast_2d(psi) - theta[:, None] - faces.angle[face]))
     ok &= np.all(~assigned | (ang <= phi + d_theta[:, None] + ANGLE_SLACK), axis=1)
     return ok
 
@@ -98,7 +101,7 @@ def _on_moved_faces(points, starts, ends, face, assigned, cos, sin, t, move, rea
             f = face[n, j]
             ax, ay, bx, by = _posed_face(starts, ends, f, c, sn, tx, ty)
             length = math.hypot(bx - ax, by - ay)
-            px, py = points[j, 0] - ax, points[j, 1] - ay
+            px, py = points[n, j, 0] - ax, points[n, j, 1] - ay
             x, y = px, py
             if length > 0.0:
                 ex, ey = (bx - ax) / length, (by - ay) / length
@@ -137,7 +140,8 @@ def contacts_on_faces(
     t: np.ndarray,
     tol: np.ndarray | float,
 ) -> np.ndarray:
-    """(K, M) does every assigned contact (`points` (s, 2)) lie within `tol` (K, M)
+    """(K, M) does every assigned contact (`points` (s, 2), or (K, s, 2) per row)
+    lie within `tol` (K, M)
     of its FINITE face (`face`, `assigned` (K, s)) posed at ``theta`` (K, M), ``t``
     (K, M, 2)? One pass per pose that stops at the first contact off its face,
     measuring with :func:`planner.compiled.segment_gap` (the arithmetic of
@@ -157,10 +161,11 @@ def _compiled_inputs(
     theta: np.ndarray,
     t: np.ndarray,
 ) -> tuple[np.ndarray, ...]:
-    """The contacts, the faces, the rows' faces and the poses (cos, sin, t) as the
-    compiled face checks take them."""
+    """The contacts (one per row: `points` (s, 2) shared or (K, s, 2) per row),
+    the faces, the rows' faces and the poses (cos, sin, t) as the compiled face
+    checks take them."""
     return (
-        c_array(points, dtype=float),
+        c_array(np.broadcast_to(points, (len(face), *np.shape(points)[-2:])), dtype=float),
         c_array(faces.start, dtype=float),
         c_array(faces.end, dtype=float),
         c_array(face, dtype=np.int64),
@@ -184,7 +189,7 @@ def _on_faces(points, starts, ends, face, assigned, cos, sin, t, tol, out):  # t
                     continue
                 f = face[k, j]
                 ax, ay, bx, by = _posed_face(starts, ends, f, c, s, tx, ty)
-                gap_x, gap_y = segment_gap(points[j, 0], points[j, 1], ax, ay, bx, by)
+                gap_x, gap_y = segment_gap(points[k, j, 0], points[k, j, 1], ax, ay, bx, by)
                 if math.hypot(gap_x, gap_y) > tol[k, m]:
                     out[k, m] = False
                     break
@@ -233,18 +238,31 @@ def free_space_check(
     eps_d: float,
     slack: float,
     which: np.ndarray | None = None,
+    variants: PathVariants | None = None,
 ) -> np.ndarray:
     """`keep` (N,) and, for each pose (`theta` (N,), `t` (N, 2)), every path clear
     of the posed outline shrunk by ``eps_t/2 + slack``: up to each contact the
     sample assigns (`assigned` (N, s)), less ``eps_d + slack``, and each missed path
     whole. Samples `keep` leaves out are not checked (they stay False). Given
-    several groups, `which` (N,) names each pose's."""
+    several groups, `which` (N,) names each pose's; given `variants`, each pose
+    observes `observations` and then its variant's last path."""
     # free space: path up to each contact (less eps_d), and each missed path whole
     floor = max(slack, LENGTH_SLACK)
     shrink = eps_t / 2 + slack
     return clear_paths(
-        group, observations, assigned, theta, t, shrink, keep, eps_d + slack, floor, which
-    )
+        group, observations, assigned, theta, t, shrink, keep, eps_d + slack, floor, which,
+        variants,
+    )  # fmt: skip
+
+
+@dataclass(frozen=True, eq=False)
+class PathVariants:
+    """Observation lists alike but for their last observation, checked in one pass:
+    `last` (B,) each list's last observation (every one a contact), `of` (N,) the
+    list each checked pose observes."""
+
+    last: Sequence[Observation]
+    of: np.ndarray
 
 
 def clear_paths(
@@ -258,42 +276,43 @@ def clear_paths(
     back: float,
     floor: float,
     which: np.ndarray | None = None,
+    variants: PathVariants | None = None,
 ) -> np.ndarray:
     """`keep` (N,) and, for each pose (`theta`, `t`, N rows), every path clear of
     the posed outline shrunk by `shrink`: up to each contact the row assigns
     (`assigned` (N, s)), less `back`, and each missed path whole. Given several
-    groups, `which` (N,) names each row's. Every (row, path) pair is one segment
-    of a single pass per group, path height and shrink."""
+    groups, `which` (N,) names each row's; given `variants`, each row observes
+    `observations` and then its variant's last path. Every (row, path) pair is one
+    segment of a single pass per group, path height and shrink."""
     groups = [group] if which is None else list(group)  # type: ignore[arg-type]
     which = np.zeros(len(keep), np.int64) if which is None else np.asarray(which)
     keep = keep.copy()
-    if not observations or not keep.any():
+    lists = [observations] if variants is None else [[*observations, o] for o in variants.last]
+    if not lists[0] or not keep.any():
         return keep
-    origin = np.array([o.path.origin for o in observations], dtype=float)
-    direction = np.array([o.path.direction for o in observations], dtype=float)
-    hit = np.array([o.contact is not None for o in observations])
-    length = np.array([o.path.length for o in observations], dtype=float)
-    points = np.array([o.contact.point if o.contact else (0.0, 0.0) for o in observations])
-    length[hit] = np.einsum("ki,ki->k", points[hit] - origin[hit], direction[hit]) - back
-    # the layer of each group each path runs at
-    layer = np.array([[g.stable.layer_index(o.path.height) for o in observations] for g in groups])
+    of = np.zeros(len(keep), np.int64) if variants is None else np.asarray(variants.of)
+    paths = [_paths(o, groups, back) for o in lists]
+    origin, direction, length, layer = (np.stack([p[i] for p in paths]) for i in range(4))
+    hit = paths[0][4]
     layers = int(layer.max(initial=0)) + 1
     # which rows check which path: a missed path always, a contact's path where
     # the row assigns that contact to a face
-    check = np.broadcast_to(~hit, (len(keep), len(observations))).copy()
+    check = np.broadcast_to(~hit, (len(keep), len(hit))).copy()
     check[:, hit] = assigned[:, : int(hit.sum())]
-    check &= keep[:, None] & (length > 0)[None, :]
+    check &= keep[:, None] & (length[of] > 0)
     step = _tol_step(shrink, floor)
     steps = int(step.max(initial=0)) + 1
-    rows, paths = np.nonzero(check)
+    rows, cols = np.nonzero(check)
     for lo in range(0, len(rows), CHECK_PAIRS):
-        i, k = rows[lo : lo + CHECK_PAIRS], paths[lo : lo + CHECK_PAIRS]
+        i, k = rows[lo : lo + CHECK_PAIRS], cols[lo : lo + CHECK_PAIRS]
+        v = of[i]
         R = rotation_matrices(theta[i])
-        a = np.einsum("nji,nj->ni", R, origin[k] - t[i])
-        b = np.einsum("nji,nj->ni", R, origin[k] + length[k, None] * direction[k] - t[i])
+        a = np.einsum("nji,nj->ni", R, origin[v, k] - t[i])
+        end = origin[v, k] + length[v, k, None] * direction[v, k]
+        b = np.einsum("nji,nj->ni", R, end - t[i])
         segments = np.hstack([a, b])
         # one pass per (group, height, shrink): the segments sorted by it and split
-        key = (which[i] * layers + layer[which[i], k]) * steps + step[i]
+        key = (which[i] * layers + layer[v, which[i], k]) * steps + step[i]
         kinds, inverse = np.unique(key, return_inverse=True)
         ends = np.cumsum(np.bincount(inverse, minlength=len(kinds)))[:-1]
         for kind, sel in zip(kinds, np.split(np.argsort(inverse), ends), strict=True):
@@ -302,6 +321,22 @@ def clear_paths(
             crossed = groups[g].crossed(segments[sel], floor * _TOL_RATIO ** float(n), z)
             keep[i[sel[crossed]]] = False
     return keep
+
+
+def _paths(
+    observations: list[Observation], groups: Sequence[Group], back: float
+) -> tuple[np.ndarray, ...]:
+    """Each observation's path as the free-space check runs it: origin, direction,
+    the length checked (up to the contact less `back`, or whole), the layer of each
+    group it runs at (G, O), and whether it met a contact."""
+    origin = np.array([o.path.origin for o in observations], dtype=float)
+    direction = np.array([o.path.direction for o in observations], dtype=float)
+    hit = np.array([o.contact is not None for o in observations])
+    length = np.array([o.path.length for o in observations], dtype=float)
+    points = np.array([o.contact.point if o.contact else (0.0, 0.0) for o in observations])
+    length[hit] = np.einsum("ki,ki->k", points[hit] - origin[hit], direction[hit]) - back
+    layer = np.array([[g.stable.layer_index(o.path.height) for o in observations] for g in groups])
+    return origin, direction, length, layer, hit
 
 
 #: Ratio of the geometric grid the free-space shrinks are rounded onto.

@@ -61,11 +61,12 @@ def rotation_gate(
 ) -> np.ndarray:
     """(K,) can one rotation turn every assigned face normal onto its contact's?
 
-    `psi` (s,) the measured normals' angles, `face_angle` (K, s) the assigned
+    `psi` (s,) the measured normals' angles (or (K, s), each row's own),
+    `face_angle` (K, s) the assigned
     faces' normal angles (model frame), `phi` the normal error bound (radians).
     """
     # rotation gate: every angle(u_j) - angle(n_a) within 2 phi of their circular mean
-    delta = wrap_angle(psi[None, :] - face_angle)
+    delta = wrap_angle(np.atleast_2d(psi) - face_angle)
     mean = np.arctan2((np.sin(delta) * assigned).sum(1), (np.cos(delta) * assigned).sum(1))
     return np.all(
         ~assigned | (np.abs(wrap_angle(delta - mean[:, None])) <= 2 * phi + ANGLE_SLACK), 1
@@ -140,7 +141,8 @@ def fit_poses_of_groups(
     R = rotation_matrices(fit.theta)
     rho = np.hypot(fit.z[:, 0], fit.z[:, 1])
     e = normal[np.arange(len(used)), np.argmax(used, 1)] @ _TURN.T
-    m0 = rotate(R.transpose(0, 2, 1), points[None] - fit.t[:, None, :])  # contacts' model points
+    per_row = points if points.ndim == 3 else points[None]
+    m0 = rotate(R.transpose(0, 2, 1), per_row - fit.t[:, None, :])  # contacts' model points
     return PoseFit(fit=fit, sigma_d=sigma_d, slide_axis=e, rho=rho, model_points=m0)
 
 
@@ -449,8 +451,8 @@ def sample_bounds(
         det, at, pos = determined_rows(fit, src)
         if det.size:
             found = consistent_set_bounds(
-                points,
-                normals,
+                points if points.ndim == 2 else points[det],
+                normals if normals.ndim == 2 else normals[det],
                 faces.normal[face[det]],
                 faces.offset[face[det]],
                 assigned[det],

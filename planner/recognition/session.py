@@ -39,6 +39,7 @@ from planner.models.simplify import simplify_models, widened
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.class_join import join_classes
 from planner.recognition.config import RecognitionConfig
+from planner.recognition.derived import Derived, derive_together, derived_state, empty_state
 from planner.recognition.equivalence import (
     SAMPLE_SPACING,
     SYMMETRY_FLOOR,
@@ -46,7 +47,7 @@ from planner.recognition.equivalence import (
     equivalence_classes,
 )
 from planner.recognition.evaluate import PoseSamples, evaluate_groups
-from planner.recognition.tree import Group, TreeLevel, extend, face_of, fold_runs, make_groups
+from planner.recognition.tree import Group, TreeLevel, extend, face_of, make_groups
 from planner.types import (
     Accuracy,
     ErrorBound,
@@ -80,17 +81,6 @@ class Localization:
     accuracy: Accuracy
     missing: tuple[str, ...]
     rotation_free: bool = False
-
-
-@dataclass(frozen=True, eq=False)
-class _Derived:
-    """The checked rows of the tree (`level`), their posed samples, and the rows the
-    next observation extends (`ahead`: the level with its contacts folded where the
-    rows of a group multiply, :func:`~planner.recognition.tree.fold_runs`)."""
-
-    level: TreeLevel
-    candidates: tuple[PoseSamples, ...]
-    ahead: TreeLevel
 
 
 class Session:
@@ -180,6 +170,34 @@ class Session:
         survive, their classes, the bound) depends on it only through the order in
         which the equivalence picks its leaders."""
         return self._after(observation, dataclasses.replace(self.config, residual_fitness=False))
+
+    def predict_many(self, observations: Sequence[Observation]) -> list[Session | None]:
+        """:meth:`predict` of each observation (None where it is not a valid one),
+        the contacts among them checked in one evaluation
+        (:func:`~planner.recognition.derived.derive_together`): the same sessions,
+        without the fixed cost of an evaluation each."""
+        out: list[Session | None] = []
+        for observation in observations:
+            try:
+                out.append(self.predict(observation))
+            except InvalidObservationError:
+                out.append(None)
+        hits = [s for s in out if s is not None and s.observations[-1].contact is not None]
+        if len(hits) > 1:
+            first = hits[0]
+            states = derive_together(
+                self._groups,
+                [s._extended for s in hits],  # type: ignore[misc]
+                list(first.surface_observations[:-1]),
+                [s.surface_observations[-1] for s in hits],
+                first.bounds,
+                first.workspace,
+                first.config,
+                first.length_scale,
+            )
+            for s, state in zip(hits, states, strict=True):
+                s.__dict__["_derived"] = state
+        return out
 
     def _after(self, observation: Observation, config: RecognitionConfig) -> Session:
         return Session(
@@ -276,11 +294,10 @@ class Session:
         return rows * (contacts + self.config.max_family_samples)
 
     @cached_property
-    def _derived(self) -> _Derived:
+    def _derived(self) -> Derived:
         level = self._extended
         if level is None:  # no observation at all
-            empty = TreeLevel(rows=tuple(np.zeros((1, 0), np.int64) for _ in self._groups))
-            return _Derived(empty, (), empty)
+            return empty_state(self._groups)
         found = evaluate_groups(
             self._groups,
             level.rows,
@@ -290,22 +307,7 @@ class Session:
             self.config,
             self.length_scale,
         )
-        candidates = []
-        rows_kept = []
-        for rows, cand in zip(level.rows, found, strict=True):
-            latent = (
-                np.flatnonzero(~(rows >= 0).any(axis=1)) if rows.shape[1] else np.arange(len(rows))
-            )
-            keep = np.union1d(np.unique(cand.row), latent)
-            remap = np.full(len(rows), -1)
-            remap[keep] = np.arange(len(keep))
-            rows_kept.append(rows[keep])
-            candidates.append(_reindex(cand, remap[cand.row]))
-        ahead = [
-            fold_runs(r, g.stable.all_faces.ring)
-            for r, g in zip(rows_kept, self._groups, strict=True)
-        ]
-        return _Derived(TreeLevel(tuple(rows_kept)), tuple(candidates), TreeLevel(tuple(ahead)))
+        return derived_state(self._groups, level, found)
 
     @property
     def hypothesis_count(self) -> int:
@@ -464,12 +466,6 @@ class Session:
         """World coordinates of a hypothesis' outline."""
         stable = self.models_by_name[hypothesis.object].stable_poses[hypothesis.stable_pose]
         return hypothesis.pose.apply(stable.outline)
-
-
-def _reindex(c: PoseSamples, rows: np.ndarray) -> PoseSamples:
-    return PoseSamples(
-        c.group, rows, c.theta, c.t, c.d_translation, c.d_theta, c.eps_t, c.cell, c.weight
-    )
 
 
 def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:

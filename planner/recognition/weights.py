@@ -116,17 +116,17 @@ def weights(
 
     `prior` of the group; `face`, `assigned` (N, s) each sample's faces and which
     contacts it assigns; `directions` (s, 2) the unit directions of the paths that
-    met the contacts; `fitness` (N,) from :func:`residual_fitness`; `spurious`
-    (N, s) the contacts it calls spurious, each weighed by the outlier probability
-    (default: every contact it leaves unassigned; a folded one is not spurious).
+    met the contacts (or (N, s, 2), each sample's own); `fitness` (N,) from
+    :func:`residual_fitness`; `spurious` (N, s) the contacts it calls spurious,
+    each weighed by the outlier probability (default: every contact it leaves
+    unassigned; a folded one is not spurious).
     """
     fit, src = pose.fit, samples.src
     Rs = rotation_matrices(samples.theta)
     # weight = prior x incidence likelihood x pose volume (x Gaussian residual term)
     world_n = np.einsum("nij,nsj->nsi", Rs, faces.normal[face])
-    incidence = np.where(assigned, np.abs(np.einsum("nsi,si->ns", world_n, directions)), 1.0).prod(
-        1
-    )
+    spec = "nsi,si->ns" if directions.ndim == 2 else "nsi,nsi->ns"
+    incidence = np.where(assigned, np.abs(np.einsum(spec, world_n, directions)), 1.0).prod(1)
     volume = np.sqrt(np.maximum(np.linalg.det(fit.cov), 0.0))[src]
     family, cell, span_scale = samples.family[src], samples.cell[src], samples.span_scale[src]
     volume = np.where(family, volume * cell * span_scale / pose.sigma_d, volume)

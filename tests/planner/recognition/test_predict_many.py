@@ -1,0 +1,52 @@
+"""Predictions observed together (one evaluation) are those observed alone."""
+
+from __future__ import annotations
+
+import math
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from hardware_sim.world import random_world
+from planner.recognition.session import Session
+from planner.types import Contact, Observation, SensingPath, SensorBounds
+from tests.conftest import SET_NAMES, WORKSPACE, object_set, touched_session
+
+
+def _state(session: Session | None):
+    """Everything a prediction answers, to the bit."""
+    if session is None:
+        return None
+    return repr(
+        [
+            (h.object, h.stable_pose, h.assignment, h.pose, h.error_bound, h.probability,
+             h.equivalence_class, h.interpretation)
+            for h in session.hypotheses
+        ]
+    )  # fmt: skip
+
+
+@settings(max_examples=30, deadline=None)
+@given(
+    name=st.sampled_from(SET_NAMES),
+    seed=st.integers(0, 10_000),
+    touches=st.integers(1, 3),
+    bounds=st.sampled_from([SensorBounds(1.0, math.radians(3)), SensorBounds(0.5, 0.05)]),
+)
+def test_predictions_observed_together_are_those_observed_alone(name, seed, touches, bounds):
+    """A plan's predictions of one session, observed in one evaluation
+    (`predict_many`): contacts on the true part and on parts elsewhere, a miss and
+    an observation that is not a valid one; each gives the hypotheses, bounds,
+    probabilities and classes that predicting it alone gives, bit for bit."""
+    world, session, rng = touched_session(name, bounds, seed, touches)
+    other = random_world(object_set(name), WORKSPACE, rng)
+    observations = [w.execute(w.hitting_path(rng), bounds, rng)[0] for w in (world, other) * 3]
+    observations.append(Observation(SensingPath((0.0, 250.0), (0.0, 1.0), 50.0), None))
+    behind = Observation(SensingPath((0.0, -200.0), (0.0, 1.0), 400.0), Contact((0, -250), (0, -1)))
+    observations.insert(2, behind)
+    together = session.predict_many(observations)
+    assert together[2] is None
+    for observation, predicted in zip(observations, together, strict=True):
+        if predicted is None:
+            continue
+        assert _state(predicted) == _state(session.predict(observation))
