@@ -105,6 +105,22 @@ class Budget:
         self.stopped_by = self.stopped_by or "work"
         return False
 
+    def steps_affordable(self, count: int, hypotheses: float) -> float:
+        """How many steps of `count` recognition updates each (of a session carrying
+        `hypotheses` hypotheses), taken one after another, start within the work
+        budget: a step starts while the units spent are within it (inf: unlimited).
+
+        >>> Budget(work=20_000).steps_affordable(1, 10.0), Budget().steps_affordable(2, 1.0)
+        (3, inf)
+        """
+        each = count * (
+            UNIT_US["recognition_update"] + hypotheses * UNIT_US["recognition_hypothesis"]
+        )
+        room = self.work - self.units
+        if math.isinf(room):
+            return math.inf
+        return math.floor(room / each) + 1 if room >= 0 else 0
+
     def exhausted(self) -> bool:
         """True once the work is spent or the cap passed (and from then on)."""
         if self.stopped_by is None:

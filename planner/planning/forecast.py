@@ -30,14 +30,11 @@ from __future__ import annotations
 import dataclasses
 import time
 from collections.abc import Sequence
-from contextlib import AbstractContextManager
 from dataclasses import dataclass
 
 import numpy as np
 
-from planner.errors import InvalidObservationError
 from planner.geometry import LENGTH_SLACK
-from planner.memo import ScopedMemo
 from planner.models.tip import grown_models
 from planner.planning.analysis import Analysis
 from planner.planning.budget import Budget
@@ -45,11 +42,12 @@ from planner.planning.candidates import Candidates
 from planner.planning.outcomes import OutcomeConfig, Outcomes, predict_outcomes
 from planner.planning.pose_spread import agreement, recentred
 from planner.planning.posed_set import PosedSet, pose_hypotheses
+from planner.planning.predicted import class_count, classes_after, observed, prefetch
 from planner.planning.representatives import face_counts
 from planner.planning.result import Plan
 from planner.planning.screen import screened_log
 from planner.recognition.session import Session
-from planner.types import Contact, Hypothesis, Observation, SensingPath, SensorBounds
+from planner.types import Hypothesis, SensingPath, SensorBounds
 
 __all__ = [
     "FACES_PER_HYPOTHESIS",
@@ -57,7 +55,6 @@ __all__ = [
     "RefiningPrediction",
     "forecast_distinguishing",
     "outcomes_apart",
-    "predictions",
     "recognition_ranking",
     "recognition_refining",
     "update_size",
@@ -96,12 +93,13 @@ def forecast_distinguishing(
     trust = np.ones(len(first))  # the share of each class' poses its prediction holds for
     if path.height is None:
         trust = agreement(session, leaders, out.hit, *line)[0]
+    prefetch(session, lambda _: path, out, [(0, j) for j in range(len(first))])
     for j, (k, share) in enumerate(zip(cls[first], trust, strict=True)):
         if budget.exhausted():
             return None
-        after = _observed(session, path, out, 0, j)
+        after = observed(session, path, out, 0, j)
         budget.spend_updates(1, size)
-        if _class_count(after) == 1:
+        if class_count(after) == 1:
             total += float(weight[k]) * share
     return min(total / float(weight.sum()), 1.0)
 
@@ -240,12 +238,18 @@ def recognition_ranking(
     size = update_size(session)
     # the share of each prediction that holds wherever the class may lie
     trust = _trusted(session, posed, cands, out, shortlist, top, best)
+    fetched = 0  # the shortlist's paths whose predictions are observed
     for j, c in enumerate(shortlist):
         if rows and budget.exhausted():
             break
         if len(rows) >= SHORTLIST and min(expected) < current - 1e-9:
             break  # a path predicted to change the classes is among those judged
-        left = np.array([_classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
+        if j >= fetched:  # the next paths the budget would judge, observed at once
+            ahead = SHORTLIST - len(rows) if len(rows) < SHORTLIST else SHORTLIST // 2
+            fetched = j + int(min(ahead, max(1, budget.steps_affordable(len(best), size))))
+            pairs = [(int(x), int(h)) for x in shortlist[j:fetched] for h in best]
+            prefetch(session, cands.path, out, pairs)
+        left = np.array([classes_after(session, cands.path(int(c)), out, int(c), h) for h in best])
         budget.spend_updates(len(best), size)
         left = np.where(left > 0, left, current)  # an impossible prediction teaches nothing
         rows.append(int(c))
@@ -338,57 +342,6 @@ def update_size(session: Session) -> float:
     return float(np.maximum(1.0, np.asarray(faces, dtype=float) / FACES_PER_HYPOTHESIS).sum())
 
 
-#: The sessions predicted during one plan, by the session and what it observed:
-#: hypotheses of equal pose (twins told apart elsewhere; classes that all miss)
-#: predict the same observation, and one update serves them all. Set by
-#: :func:`predictions` for the length of a plan, so nothing outlives it.
-_PREDICTED = ScopedMemo("predicted")
-
-
-def predictions() -> AbstractContextManager[None]:
-    """Within it, a predicted observation is observed once (:func:`_observed`)."""
-    return _PREDICTED.scope()
-
-
-def _observed(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> Session | None:
-    """The session once it observes hypothesis `h`'s nominal outcome on candidate
-    `c` (the first hit with its posed face normal, or a miss), as a prediction
-    (:meth:`Session.predict`: weighed without the residual fitness); None when
-    that is not a valid observation."""
-    contact = None
-    if out.hit[c, h]:
-        contact = Contact(tuple(out.point[c, h].tolist()), tuple(out.normal[c, h].tolist()))
-    observation = Observation(path, contact)
-    memo = _PREDICTED.get()
-    key = (session, observation)
-    if memo is not None and key in memo:
-        return memo[key]
-    try:
-        after: Session | None = session.predict(observation)
-    except InvalidObservationError:
-        after = None
-    if memo is not None:
-        memo[key] = after
-    return after
-
-
-def _classes_after(session: Session, path: SensingPath, out: Outcomes, c: int, h: int) -> int:
-    """Classes left once the session observes hypothesis `h`'s nominal outcome on
-    candidate `c` (0 when the predicted observation is not a valid one)."""
-    return _class_count(_observed(session, path, out, c, h))
-
-
-def _class_count(after: Session | None) -> int:
-    """Classes a predicted session holds (0: none, or not a valid observation).
-    One hypothesis or none is as many classes, known before the classes are
-    found: most predictions leave one, and the classes cost a fifth of one."""
-    if after is None:
-        return 0
-    if after.hypothesis_count <= 1:
-        return after.hypothesis_count
-    return len({g.equivalence_class for g in after.hypotheses})
-
-
 @dataclass(frozen=True, eq=False)
 class RefiningPrediction:
     """What the recognition predicts of shortlisted refining paths `rows` (best
@@ -436,11 +389,14 @@ def recognition_refining(
     size = update_size(session)
     accuracy = session.accuracy
     tried = 0
+    steps = budget.steps_affordable(1, size)
+    pairs = [(int(c), best) for c in shortlist[: int(min(len(shortlist), max(1, steps)))]]
+    prefetch(session, cands.path, out, pairs)
     for c in shortlist:
         if judged and budget.exhausted():
             break
         tried += 1
-        after = _observed(session, cands.path(int(c)), out, int(c), best)
+        after = observed(session, cands.path(int(c)), out, int(c), best)
         budget.spend_updates(1, size)
         where = None if after is None else after.localization
         if where is None or where.bound is None or where.classes != 1:

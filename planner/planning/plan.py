@@ -31,12 +31,12 @@ from planner.planning.config import StrategyConfig
 from planner.planning.forecast import (
     SHORTLIST_CLASSES_ALONE,
     RecognitionRanking,
-    predictions,
     recognition_ranking,
     with_forecast,
 )
 from planner.planning.planned import planned
 from planner.planning.pose_spread import recentred, spreads
+from planner.planning.predicted import predictions
 from planner.planning.probes import opening_probe
 from planner.planning.refining_paths import apart_paths, one_class_paths, refining_paths
 from planner.planning.representatives import (

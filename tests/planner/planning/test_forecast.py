@@ -15,14 +15,9 @@ from planner.codec import plan_to_dict
 from planner.planning import plan as plan_module
 from planner.planning.budget import UNIT_US, Budget
 from planner.planning.config import StrategyConfig
-from planner.planning.forecast import (
-    _observed,
-    forecast_distinguishing,
-    predictions,
-    update_size,
-    with_forecast,
-)
+from planner.planning.forecast import forecast_distinguishing, update_size, with_forecast
 from planner.planning.plan import plan_session
+from planner.planning.predicted import observed, predictions
 from planner.recognition.session import Session
 from planner.types import SensingPath, SensorBounds
 from tests.conftest import WORKSPACE, analysed, object_set, touched_session
@@ -407,13 +402,13 @@ def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monke
             judged.append(c)
         return 1 if len(judged) > forecast.SHORTLIST + 2 else current
 
-    monkeypatch.setattr(forecast, "_classes_after", classes_after)
+    monkeypatch.setattr(forecast, "classes_after", classes_after)
     ranking = forecast.recognition_ranking(session, found)
     assert len(judged) == forecast.SHORTLIST + 3
     assert ranking.expected_classes[0] < current
     # when the first paths already change something, no more are judged
     judged.clear()
-    monkeypatch.setattr(forecast, "_classes_after", lambda *a: 1)
+    monkeypatch.setattr(forecast, "classes_after", lambda *a: 1)
     assert len(forecast.recognition_ranking(session, found).rows) == forecast.SHORTLIST
     # until sure: a path predicted to leave one class whatever the truth ends the
     # judging (judged first here, or the first after it)
@@ -421,7 +416,7 @@ def test_the_shortlist_grows_while_no_path_is_predicted_to_change_anything(monke
     sure = forecast.recognition_ranking(session, found, first=[first], until_sure=True)
     assert sure.rows.tolist() == [first]
     assert len(forecast.recognition_ranking(session, found, first=[first]).rows) > 1
-    monkeypatch.setattr(forecast, "_classes_after", lambda s, p, o, c, h: 2 if c == first else 1)
+    monkeypatch.setattr(forecast, "classes_after", lambda s, p, o, c, h: 2 if c == first else 1)
     sure = forecast.recognition_ranking(session, found, first=[first], until_sure=True)
     assert len(sure.rows) == 2 and sure.rows[1] == first
 
@@ -431,9 +426,9 @@ def test_a_predicted_observation_is_observed_once_per_plan(monkeypatch):
     found = analysed(session)
     path = found.candidates.path(0)
     with predictions():
-        first = _observed(session, path, found.outcomes, 0, 0)
-        assert _observed(session, path, found.outcomes, 0, 0) is first
-    again = _observed(session, path, found.outcomes, 0, 0)  # no plan: no memo
+        first = observed(session, path, found.outcomes, 0, 0)
+        assert observed(session, path, found.outcomes, 0, 0) is first
+    again = observed(session, path, found.outcomes, 0, 0)  # no plan: no memo
     assert again is not first and again.hypotheses == first.hypotheses
     # the memo saves updates, never changes a plan
     config = StrategyConfig(forecast=3)
@@ -482,7 +477,7 @@ def test_the_recognition_ranks_a_halving_path_before_one_that_settles_a_class(mo
             return 1 if calls[c] == 1 else 7
         return 4 if order.index(c) == 1 else 8  # the second halves; the rest nothing
 
-    monkeypatch.setattr(forecast, "_classes_after", classes_after)
+    monkeypatch.setattr(forecast, "classes_after", classes_after)
     ranking = forecast.recognition_ranking(session, found, classes=8)
     peel, halve = order[0], order[1]
     assert ranking.rows[0] == halve and ranking.rows[1] == peel

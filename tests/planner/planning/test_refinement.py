@@ -375,7 +375,7 @@ def test_a_budget_that_ends_the_judging_is_not_taken_for_no_path(monkeypatch):
     monkeypatch.setattr(refining_module, "refining_paths", lambda *a: ([], None))
     session = _stadium_touched_twice()
     judged = []
-    monkeypatch.setattr(forecast, "_observed", lambda s, *a: judged.append(a) or s)
+    monkeypatch.setattr(forecast, "observed", lambda s, *a: judged.append(a) or s)
     monkeypatch.setattr(Budget, "exhausted", lambda self: bool(judged))
     found = plan_session(session, (200.0, 0.0), StrategyConfig(budget_ms=None), 0)
     assert len(judged) == 1
