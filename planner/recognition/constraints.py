@@ -18,7 +18,7 @@ assignment always passes (a tiny numeric slack guards the bounds' edges).
 from __future__ import annotations
 
 import math
-from dataclasses import dataclass, fields
+from dataclasses import dataclass
 
 import numba
 import numpy as np
@@ -32,6 +32,7 @@ __all__ = [
     "ConstraintTables",
     "build_tables",
     "extend_feasibility",
+    "pair_columns",
     "pair_feasibility",
     "shared_tables",
     "unary_feasibility",
@@ -157,25 +158,39 @@ def extend_feasibility(
     unary: np.ndarray,
     eps_d: float,
     phi: float,
+    columns: np.ndarray | None = None,
 ) -> np.ndarray:
     """(K, F) may the newest of `contacts` lie on face b, given each row's faces
     (`rows` (K, k), -1: spurious) for the k contacts before it? `unary` (F,) and
     every pair check of :func:`pair_feasibility` between each earlier contact on
     its row's face and the newest on b: the same arithmetic, in one compiled pass
     that reads only the table cells the rows name (a table per earlier contact
-    was F x F numbers, most of them never read)."""
-    *before, new = contacts
+    was F x F numbers, most of them never read). `columns`: the contacts'
+    :func:`pair_columns`, when known."""
     slack = LENGTH_SLACK * tables.scale
-    pairs = [_pair(c, new, eps_d, phi, slack) for c in before]
-    columns = [np.array([getattr(x, f.name) for x in pairs], dtype=float) for f in fields(_Pair)]
+    dist, measured, forward, backward = pair_columns(contacts) if columns is None else columns
+    widen = phi * dist + 2 * eps_d + slack
     out = np.empty((len(rows), len(unary)), dtype=bool)
     # the tables are always read-only (shared between sessions): one compiled version
     _extend(
         c_array(rows, dtype=np.int64), c_array(unary, dtype=bool),
         tables.d_min, tables.d_max, tables.angle, tables.c_min, tables.c_max,
-        *columns, 2 * eps_d, slack, 2 * phi + ANGLE_SLACK, out,
+        dist, measured, forward, backward, widen, 2 * eps_d, slack, 2 * phi + ANGLE_SLACK, out,
     )  # fmt: skip
     return out
+
+
+def pair_columns(contacts: list[Contact]) -> np.ndarray:
+    """(4, k) what the pair checks read of each of the k contacts before the newest
+    of `contacts` and the newest (:class:`_Pair`, the same arithmetic): the
+    distance, the measured turn and the two projections. The same for every
+    stable pose: :func:`extend_feasibility` of each takes them."""
+    *before, new = contacts
+    pairs = [_pair(c, new, 0.0, 0.0, 0.0) for c in before]
+    return np.array(
+        [[getattr(x, f) for x in pairs] for f in ("dist", "measured", "forward", "backward")],
+        dtype=float,
+    ).reshape(4, len(before))
 
 
 @numba.njit(cache=True, nogil=True)

@@ -50,8 +50,9 @@ def derived_state(
     candidates = []
     rows_kept = []
     for rows, cand in zip(level.rows, found, strict=True):
-        latent = np.flatnonzero(~(rows >= 0).any(axis=1)) if rows.shape[1] else np.arange(len(rows))
-        keep = np.union1d(np.unique(cand.row), latent)
+        kept = ~(rows >= 0).any(axis=1)  # rows that assign no contact yet stay
+        kept[cand.row] = True
+        keep = np.flatnonzero(kept)
         remap = np.full(len(rows), -1)
         remap[keep] = np.arange(len(keep))
         rows_kept.append(rows[keep])

@@ -23,6 +23,7 @@ from planner.recognition.config import RecognitionConfig
 from planner.recognition.constraints import (
     ConstraintTables,
     extend_feasibility,
+    pair_columns,
     shared_tables,
     unary_feasibility,
 )
@@ -119,12 +120,14 @@ def extend(
     """Extend every surviving row by the newest contact, made at probing `height`
     (constraint checks only): it may lie only on faces of the layer at that height."""
     new = contacts[-1]
+    columns = pair_columns(contacts)  # the same for every stable pose
     out = []
     for group, rows in zip(groups, level.rows, strict=True):
         unary = unary_feasibility(group.stable, new, config.normal_z_error, height)
         ok = extend_feasibility(
-            group.tables, rows, contacts, unary, bounds.position_error, bounds.normal_error
-        )
+            group.tables, rows, contacts, unary, bounds.position_error, bounds.normal_error,
+            columns,
+        )  # fmt: skip
         parent, face = np.nonzero(ok)
         grown = [np.column_stack([rows[parent], face])]
         outliers = (rows == -1).sum(axis=1)
