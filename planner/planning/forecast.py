@@ -246,6 +246,8 @@ def recognition_ranking(
             break  # a path predicted to change the classes is among those judged
         if j >= fetched:  # the next paths the budget would judge, observed at once
             ahead = SHORTLIST - len(rows) if len(rows) < SHORTLIST else SHORTLIST // 2
+            if until_sure:  # the first paths judged are often sure: ask for more as none is
+                ahead = min(ahead, max(1, len(rows)))
             fetched = j + int(min(ahead, max(1, budget.steps_affordable(len(best), size))))
             pairs = [(int(x), int(h)) for x in shortlist[j:fetched] for h in best]
             prefetch(session, cands.path, out, pairs)
