@@ -99,4 +99,4 @@ def class_count(after: Session | None) -> int:
         return 0
     if after.hypothesis_count <= 1:
         return after.hypothesis_count
-    return len({g.equivalence_class for g in after.hypotheses})
+    return after.class_count

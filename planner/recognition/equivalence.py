@@ -68,6 +68,7 @@ __all__ = [
     "SYMMETRY_FLOOR",
     "PosedRings",
     "equivalence_classes",
+    "none_can_share",
     "outline_distance",
     "pair_distances",
     "pairs_within",
@@ -295,6 +296,50 @@ def equivalence_classes(
     else:
         ctx.lead_lazily(order, cKDTree(keys), keys, reach)
     return _numbered(label, order)
+
+
+#: Most hypotheses :func:`none_can_share` compares pair by pair.
+SHARE_SCREEN_MOST = 64
+
+
+def none_can_share(
+    stables: Sequence[StablePose],
+    theta: Sequence[np.ndarray],
+    t: Sequence[np.ndarray],
+    family: np.ndarray,
+    shapes: np.ndarray,
+    tau: float,
+) -> bool:
+    """True when no two posed outlines can share a class, known without measuring
+    them: outlines of stable pose k at poses ``theta[k]``, ``t[k]``, stacked;
+    every two of one shape (`shapes`, one per stable pose) and of different slide
+    families (`family`, one per outline) have support values
+    (:data:`SUPPORT_DIRECTIONS`, of their vertices) over `tau` apart in some
+    direction. No class holds two outlines farther apart than `tau`, and outlines
+    within d of each other have support values within d (every vertex is a
+    measured point). False, too, past `SHARE_SCREEN_MOST` outlines."""
+    sizes = [len(x) for x in theta]
+    n = sum(sizes)
+    if n > SHARE_SCREEN_MOST:
+        return False
+    support = np.concatenate(
+        [
+            (
+                (
+                    rotate(rotation_matrices(np.asarray(th, dtype=float)), stable.faces.start)
+                    + np.asarray(tt, dtype=float).reshape(-1, 2)[:, None, :]
+                )
+                @ SUPPORT_DIRECTIONS.T
+            ).max(axis=1)
+            for stable, th, tt in zip(stables, theta, t, strict=True)
+        ]
+    )
+    shape = np.repeat(np.asarray(shapes), sizes)
+    i, j = np.triu_indices(n, 1)
+    reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max(initial=0.0)))
+    could = (family[i] != family[j]) & (shape[i] == shape[j])
+    could &= np.abs(support[i] - support[j]).max(axis=1, initial=0.0) <= reach
+    return not could.any()
 
 
 def _numbered(label: np.ndarray, order: np.ndarray) -> np.ndarray:

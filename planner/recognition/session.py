@@ -45,6 +45,7 @@ from planner.recognition.equivalence import (
     SYMMETRY_FLOOR,
     PosedRings,
     equivalence_classes,
+    none_can_share,
 )
 from planner.recognition.evaluate import PoseSamples, evaluate_groups
 from planner.recognition.tree import Group, TreeLevel, extend, face_of, make_groups
@@ -315,6 +316,24 @@ class Session:
         are found (the interpretation tree and the pose fits only): what bounds the
         cost of :attr:`hypotheses`."""
         return sum(len(c.weight) for c in self._derived.candidates)
+
+    @cached_property
+    def class_count(self) -> int:
+        """How many equivalence classes the hypotheses form: as many as hypotheses
+        when no two can share one (:func:`~planner.recognition.equivalence.
+        none_can_share`, without measuring their outlines: most of a plan's
+        predicted sessions), else counted from :attr:`hypotheses`."""
+        cands = [c for c in self._derived.candidates if len(c.weight)]
+        n = sum(len(c.weight) for c in cands)
+        if n > 1 and "_ranked" not in self.__dict__:
+            z = probing_heights(self.models)[0]  # apart at one height: apart at all
+            if none_can_share(
+                [self._stable(c, z) for c in cands], [c.theta for c in cands],
+                [c.t for c in cands], _interpretation_labels(cands),
+                self._shapes[[c.group for c in cands]], self.symmetry_tolerance,
+            ):  # fmt: skip
+                return n
+        return len({h.equivalence_class for h in self.hypotheses})
 
     @property
     def hypotheses(self) -> list[Hypothesis]:

@@ -309,3 +309,23 @@ def test_probe_distances_are_the_distances_to_the_nearest_face(seed, n_faces):
     faces = shapely.multilinestrings(np.stack([starts, ends], axis=1))
     want = shapely.distance(shapely.points(points), faces)
     np.testing.assert_allclose(got, want, rtol=1e-12, atol=1e-12)
+
+
+def test_none_can_share_only_outlines_whose_support_values_lie_apart():
+    """Two squares 0.9 tau apart may share a class (a join takes them in): the
+    screen says so; 1.1 tau apart (their support values differ by that much) they
+    cannot, nor can two of one slide family or of two shapes."""
+    from planner.recognition.equivalence import none_can_share
+
+    square = object_from_dict({"name": "sq", "outline": [[-5, -5], [5, -5], [5, 5], [-5, 5]]})
+    stable, tau = square.stable_poses[0], 1.0
+
+    def apart(dx, family=(0, 1), shapes=(0, 0)):
+        return none_can_share(
+            [stable, stable], [np.zeros(1), np.zeros(1)], [np.zeros((1, 2)), np.array([[dx, 0.0]])],
+            np.array(family), np.array(shapes), tau,
+        )  # fmt: skip
+
+    assert not apart(0.9 * tau) and not apart(0.0)
+    assert apart(1.1 * tau)
+    assert apart(0.0, family=(3, 3)) and apart(0.0, shapes=(0, 1))

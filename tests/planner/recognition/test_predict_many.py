@@ -50,3 +50,22 @@ def test_predictions_observed_together_are_those_observed_alone(name, seed, touc
         if predicted is None:
             continue
         assert _state(predicted) == _state(session.predict(observation))
+
+
+@settings(max_examples=40, deadline=None)
+@given(
+    name=st.sampled_from(SET_NAMES),
+    seed=st.integers(0, 10_000),
+    touches=st.integers(1, 3),
+)
+def test_the_class_count_is_the_number_of_classes(name, seed, touches):
+    """`class_count` (no two hypotheses can share a class when their outlines'
+    support values lie apart: counted without the classes) is the number of
+    classes the hypotheses carry, for sessions and their predictions alike."""
+    bounds = SensorBounds(1.0, math.radians(3))
+    world, session, rng = touched_session(name, bounds, seed, touches)
+    other = random_world(object_set(name), WORKSPACE, rng)
+    observations = [w.execute(w.hitting_path(rng), bounds, rng)[0] for w in (world, other) * 2]
+    for s in [session, *session.predict_many(observations)]:
+        counted = s.class_count  # before the classes are found
+        assert counted == len({h.equivalence_class for h in s.hypotheses})
