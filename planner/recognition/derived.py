@@ -18,7 +18,7 @@ import numpy as np
 
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.evaluate import PoseSamples, Variants, evaluate_groups
-from planner.recognition.tree import Group, TreeLevel, fold_runs
+from planner.recognition.tree import Group, TreeLevel, extend_many, fold_runs
 from planner.types import Observation, SensorBounds, Workspace
 
 __all__ = ["Derived", "derive_together", "derived_state", "empty_state"]
@@ -63,20 +63,26 @@ def derived_state(
 
 def derive_together(
     groups: Sequence[Group],
-    levels: Sequence[TreeLevel],
+    ahead: TreeLevel,
     observations: list[Observation],
     last: Sequence[Observation],
     bounds: SensorBounds,
     workspace: Workspace,
     config: RecognitionConfig,
     length_scale: float,
-) -> list[Derived]:
-    """The state of each of several predictions in one evaluation: prediction b
-    observes `observations` and then its contact `last[b]`, and its tree grew to
-    `levels[b]`. Every row is evaluated against its own prediction's observations
-    (:class:`~planner.recognition.evaluate.Variants`), so each state is the one
-    the prediction derives alone, bit for bit. `config` leaves the residual
-    fitness out (as a prediction does)."""
+) -> tuple[list[TreeLevel], list[Derived]]:
+    """The grown tree and the state of each of several predictions, in one
+    evaluation: prediction b observes `observations` and then its contact
+    `last[b]`, extending the rows `ahead` of the session they follow
+    (:func:`~planner.recognition.tree.extend_many`). Every row is evaluated
+    against its own prediction's observations
+    (:class:`~planner.recognition.evaluate.Variants`), so each state is the one the
+    prediction derives alone, bit for bit. `config` leaves the residual fitness
+    out (as a prediction does)."""
+    before = [o.contact for o in observations if o.contact is not None]
+    news = [o.contact for o in last]
+    heights = [o.path.height for o in last]
+    levels = extend_many(ahead, list(groups), before, news, bounds, config, heights)
     counts = np.array([[len(r) if r.size else 0 for r in lv.rows] for lv in levels])  # (B, G)
     rows = [
         np.concatenate([lv.rows[g] for lv, n in zip(levels, counts[:, g], strict=True) if n])
@@ -98,7 +104,7 @@ def derive_together(
             sel = np.flatnonzero((cand.row >= lo) & (cand.row < hi))
             mine.append(_selected(cand, sel, lo))
         out.append(derived_state(groups, level, mine))
-    return out
+    return levels, out
 
 
 def renumbered(c: PoseSamples, rows: np.ndarray) -> PoseSamples:

@@ -186,9 +186,9 @@ class Session:
         hits = [s for s in out if s is not None and s.observations[-1].contact is not None]
         if len(hits) > 1:
             first = hits[0]
-            states = derive_together(
+            levels, states = derive_together(
                 self._groups,
-                [s._extended for s in hits],  # type: ignore[misc]
+                self._derived.ahead,
                 list(first.surface_observations[:-1]),
                 [s.surface_observations[-1] for s in hits],
                 first.bounds,
@@ -196,8 +196,8 @@ class Session:
                 first.config,
                 first.length_scale,
             )
-            for s, state in zip(hits, states, strict=True):
-                s.__dict__["_derived"] = state
+            for s, level, state in zip(hits, levels, states, strict=True):
+                s.__dict__["_extended"], s.__dict__["_derived"] = level, state
         return out
 
     def _after(self, observation: Observation, config: RecognitionConfig) -> Session:

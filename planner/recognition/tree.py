@@ -30,7 +30,16 @@ from planner.recognition.constraints import (
 from planner.recognition.crossing import ring_edges, segments_meet
 from planner.types import Contact, ObjectModel, SensorBounds, StablePose
 
-__all__ = ["FOLD_ROWS", "Group", "TreeLevel", "extend", "face_of", "fold_runs", "make_groups"]
+__all__ = [
+    "FOLD_ROWS",
+    "Group",
+    "TreeLevel",
+    "extend",
+    "extend_many",
+    "face_of",
+    "fold_runs",
+    "make_groups",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -119,23 +128,48 @@ def extend(
 ) -> TreeLevel:
     """Extend every surviving row by the newest contact, made at probing `height`
     (constraint checks only): it may lie only on faces of the layer at that height."""
-    new = contacts[-1]
-    columns = pair_columns(contacts)  # the same for every stable pose
-    out = []
+    *before, new = contacts
+    return extend_many(level, groups, before, [new], bounds, config, [height])[0]
+
+
+def extend_many(
+    level: TreeLevel,
+    groups: list[Group],
+    before: list[Contact],
+    news: list[Contact],
+    bounds: SensorBounds,
+    config: RecognitionConfig,
+    heights: list[float | None],
+) -> list[TreeLevel]:
+    """:func:`extend` of `level` by each of several newest contacts (`news`, made
+    at `heights`) after the same contacts `before` (a plan's predictions): the
+    rows each extension gives alone. Per group, the checks of every row against
+    each new contact's faces (the pair numbers the same for every stable pose:
+    :func:`~planner.recognition.constraints.pair_columns`), then a spurious
+    branch for the rows that may call one more contact spurious."""
+    columns = [pair_columns([*before, new]) for new in news]
+    out: list[list[np.ndarray]] = [[] for _ in news]
     for group, rows in zip(groups, level.rows, strict=True):
-        unary = unary_feasibility(group.stable, new, config.normal_z_error, height)
-        ok = extend_feasibility(
-            group.tables, rows, contacts, unary, bounds.position_error, bounds.normal_error,
-            columns,
-        )  # fmt: skip
-        parent, face = np.nonzero(ok)
-        grown = [np.column_stack([rows[parent], face])]
+        unary: dict[tuple, np.ndarray] = {}
+        ok = np.empty((len(news), len(rows), len(group.stable.all_faces.start)), dtype=bool)
+        for b, (new, height) in enumerate(zip(news, heights, strict=True)):
+            key = (height, new.normal_z)
+            if key not in unary:
+                unary[key] = unary_feasibility(group.stable, new, config.normal_z_error, height)
+            ok[b] = extend_feasibility(
+                group.tables, rows, [*before, new], unary[key], bounds.position_error,
+                bounds.normal_error, columns[b],
+            )  # fmt: skip
+        which, parent, face = np.nonzero(ok)
+        grown = np.column_stack([rows[parent], face])
         outliers = (rows == -1).sum(axis=1)
         spare = np.flatnonzero(outliers < config.max_outliers)
-        if spare.size:
-            grown.append(np.column_stack([rows[spare], np.full(spare.size, -1)]))
-        out.append(np.concatenate(grown).astype(np.int64))
-    return TreeLevel(rows=tuple(out))
+        spurious = [np.column_stack([rows[spare], np.full(spare.size, -1)])] if spare.size else []
+        ends = np.searchsorted(which, np.arange(len(news) + 1))
+        for b in range(len(news)):
+            mine = grown[ends[b] : ends[b + 1]]
+            out[b].append(np.concatenate([mine, *spurious]).astype(np.int64))
+    return [TreeLevel(rows=tuple(x)) for x in out]
 
 
 #: Rows of one group past which the rows that differ only in the neighbouring face of

@@ -4,25 +4,30 @@ from __future__ import annotations
 
 import math
 
+import numpy as np
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
 from hardware_sim.world import random_world
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.session import Session
 from planner.types import Contact, Observation, SensingPath, SensorBounds
 from tests.conftest import SET_NAMES, WORKSPACE, object_set, touched_session
 
 
 def _state(session: Session | None):
-    """Everything a prediction answers, to the bit."""
+    """Everything a prediction answers, to the bit, and the rows of its tree
+    (those it kept and those the next observation extends)."""
     if session is None:
         return None
+    derived = session._derived
     return repr(
         [
             (h.object, h.stable_pose, h.assignment, h.pose, h.error_bound, h.probability,
              h.equivalence_class, h.interpretation)
             for h in session.hypotheses
         ]
+        + [r.tolist() for r in (*derived.level.rows, *derived.ahead.rows)]
     )  # fmt: skip
 
 
@@ -32,13 +37,22 @@ def _state(session: Session | None):
     seed=st.integers(0, 10_000),
     touches=st.integers(1, 3),
     bounds=st.sampled_from([SensorBounds(1.0, math.radians(3)), SensorBounds(0.5, 0.05)]),
+    outliers=st.integers(0, 1),
 )
-def test_predictions_observed_together_are_those_observed_alone(name, seed, touches, bounds):
+def test_predictions_observed_together_are_those_observed_alone(
+    name, seed, touches, bounds, outliers
+):
     """A plan's predictions of one session, observed in one evaluation
     (`predict_many`): contacts on the true part and on parts elsewhere, a miss and
-    an observation that is not a valid one; each gives the hypotheses, bounds,
-    probabilities and classes that predicting it alone gives, bit for bit."""
-    world, session, rng = touched_session(name, bounds, seed, touches)
+    an observation that is not a valid one, with and without a spurious contact
+    allowed; each gives the tree, hypotheses, bounds, probabilities and classes
+    that predicting it alone gives, bit for bit."""
+    rng = np.random.default_rng(seed)
+    world = random_world(object_set(name), WORKSPACE, rng)
+    config = RecognitionConfig(max_outliers=outliers)
+    session = Session(object_set(name), bounds, WORKSPACE, config)
+    for _ in range(touches):
+        session = session.observe(world.execute(world.hitting_path(rng), bounds, rng)[0])
     other = random_world(object_set(name), WORKSPACE, rng)
     observations = [w.execute(w.hitting_path(rng), bounds, rng)[0] for w in (world, other) * 3]
     observations.append(Observation(SensingPath((0.0, 250.0), (0.0, 1.0), 50.0), None))
