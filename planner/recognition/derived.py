@@ -16,12 +16,19 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from planner.arrays import row_labels
 from planner.recognition.config import RecognitionConfig
 from planner.recognition.evaluate import PoseSamples, Variants, evaluate_groups
 from planner.recognition.tree import Group, TreeLevel, extend_many, fold_runs
 from planner.types import Observation, SensorBounds, Workspace
 
-__all__ = ["Derived", "derive_together", "derived_state", "empty_state"]
+__all__ = [
+    "Derived",
+    "derive_together",
+    "derived_state",
+    "empty_state",
+    "interpretation_labels",
+]
 
 
 @dataclass(frozen=True, eq=False)
@@ -120,3 +127,10 @@ def _selected(c: PoseSamples, sel: np.ndarray, first: int) -> PoseSamples:
         c.group, c.row[sel] - first, c.theta[sel], c.t[sel], c.d_translation[sel],
         c.d_theta[sel], c.eps_t[sel], c.cell[sel], c.weight[sel],
     )  # fmt: skip
+
+
+def interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:
+    """One label per hypothesis naming the interpretation (group, row) it was posed
+    from: the samples of one slide family share it."""
+    pairs = np.concatenate([np.column_stack([np.full(len(c.row), c.group), c.row]) for c in cands])
+    return row_labels(pairs)

@@ -39,7 +39,13 @@ from planner.models.simplify import simplify_models, widened
 from planner.models.tip import surface_bounds, surface_contact
 from planner.recognition.class_join import join_classes
 from planner.recognition.config import RecognitionConfig
-from planner.recognition.derived import Derived, derive_together, derived_state, empty_state
+from planner.recognition.derived import (
+    Derived,
+    derive_together,
+    derived_state,
+    empty_state,
+    interpretation_labels,
+)
 from planner.recognition.equivalence import (
     SAMPLE_SPACING,
     SYMMETRY_FLOOR,
@@ -187,15 +193,10 @@ class Session:
         if len(hits) > 1:
             first = hits[0]
             levels, states = derive_together(
-                self._groups,
-                self._derived.ahead,
-                list(first.surface_observations[:-1]),
-                [s.surface_observations[-1] for s in hits],
-                first.bounds,
-                first.workspace,
-                first.config,
-                first.length_scale,
-            )
+                self._groups, self._derived.ahead, list(first.surface_observations[:-1]),
+                [s.surface_observations[-1] for s in hits], first.bounds, first.workspace,
+                first.config, first.length_scale,
+            )  # fmt: skip
             for s, level, state in zip(hits, levels, states, strict=True):
                 s.__dict__["_extended"], s.__dict__["_derived"] = level, state
         return out
@@ -325,15 +326,19 @@ class Session:
         predicted sessions), else counted from :attr:`hypotheses`."""
         cands = [c for c in self._derived.candidates if len(c.weight)]
         n = sum(len(c.weight) for c in cands)
-        if n > 1 and "_ranked" not in self.__dict__:
-            z = probing_heights(self.models)[0]  # apart at one height: apart at all
-            if none_can_share(
-                [self._stable(c, z) for c in cands], [c.theta for c in cands],
-                [c.t for c in cands], _interpretation_labels(cands),
-                self._shapes[[c.group for c in cands]], self.symmetry_tolerance,
-            ):  # fmt: skip
-                return n
+        if n > 1 and "_ranked" not in self.__dict__ and self._apart(cands):
+            return n
         return len({h.equivalence_class for h in self.hypotheses})
+
+    def _apart(self, cands: list[PoseSamples]) -> bool:
+        """No two hypotheses can share a class (:func:`~planner.recognition.
+        equivalence.none_can_share` at one probing height: apart there, apart)."""
+        z = probing_heights(self.models)[0]
+        return none_can_share(
+            [self._stable(c, z) for c in cands], [c.theta for c in cands],
+            [c.t for c in cands], interpretation_labels(cands),
+            self._shapes[[c.group for c in cands]], self.symmetry_tolerance,
+        )  # fmt: skip
 
     @property
     def hypotheses(self) -> list[Hypothesis]:
@@ -416,10 +421,15 @@ class Session:
         outlines within the symmetry tolerance of each other, most probable first,
         classes the leaders split joined where they coincide
         (:mod:`planner.recognition.class_join`); and per hypothesis whether its
-        class was joined."""
+        class was joined. When no two can share a class, each is its own, numbered
+        as the leaders come (most probable first), found without the classes."""
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
-        labels = _interpretation_labels(cands)
+        if self._apart(cands):
+            place = np.empty(len(prob), dtype=np.int64)
+            place[order] = np.arange(len(prob))
+            return place, np.zeros(len(prob), dtype=bool)
+        labels = interpretation_labels(cands)
         shapes = self._shapes[[c.group for c in cands]]
         spacing = SAMPLE_SPACING * tau  # of the points measured along each face
         # one class: the outlines coincide at every probing height
@@ -485,10 +495,3 @@ class Session:
         """World coordinates of a hypothesis' outline."""
         stable = self.models_by_name[hypothesis.object].stable_poses[hypothesis.stable_pose]
         return hypothesis.pose.apply(stable.outline)
-
-
-def _interpretation_labels(cands: Sequence[PoseSamples]) -> np.ndarray:
-    """One label per hypothesis naming the interpretation (group, row) it was posed
-    from: the samples of one slide family share it."""
-    pairs = np.concatenate([np.column_stack([np.full(len(c.row), c.group), c.row]) for c in cands])
-    return row_labels(pairs)
