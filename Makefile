@@ -9,14 +9,19 @@ $(BIN)/python:
 	$(PYTHON) -m venv $(VENV)
 	$(BIN)/python -m pip install --quiet --upgrade pip
 
-# Runtime install (the demo).
+# Runtime install (the demo). The compiled kernels are built into their on-disk cache
+# here, once, so that a service's first answers (and each test worker) only load them.
+WARM_UP := $(BIN)/python -c "from planner.warmup import warm_up; warm_up()"
+
 $(VENV)/.installed: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --quiet -e .
+	$(WARM_UP)
 	touch $@
 
 # Development install (tests, linters).
 $(VENV)/.installed-dev: pyproject.toml | $(BIN)/python
 	$(BIN)/pip install --quiet -e '.[dev]'
+	$(WARM_UP)
 	touch $(VENV)/.installed $@
 
 venv: $(VENV)/.installed
