@@ -164,9 +164,19 @@ def weighted_count(words: np.ndarray, weight: np.ndarray) -> np.ndarray:
     table = padded.reshape(n_bytes, 8) @ subsets.T
     raw = np.ascontiguousarray(np.asarray(words, dtype="<u8")).view(np.uint8)
     total = np.zeros(raw.shape[:-1])
-    for b in range(n_bytes):  # byte by byte: no (..., bytes) temporary
-        total += table[b][raw[..., b]]
+    # byte by byte, in order, as `total += table[b][raw[..., b]]` adds them
+    _table_sums(raw.reshape(-1, raw.shape[-1]), c_array(table, dtype=float), total.reshape(-1))
     return total
+
+
+@numba.njit(cache=True, nogil=True)
+def _table_sums(raw, table, out):  # type: ignore[no-untyped-def]
+    """out[m] = sum over bytes b of table[b, raw[m, b]], added byte after byte."""
+    for m in range(raw.shape[0]):
+        total = 0.0
+        for b in range(table.shape[0]):
+            total += table[b, raw[m, b]]
+        out[m] = total
 
 
 @dataclass(frozen=True, eq=False)
