@@ -37,7 +37,7 @@ from collections.abc import Sequence
 import numpy as np
 from scipy.spatial import cKDTree
 
-from planner.recognition.equivalence import PosedRings, pairs_within
+from planner.recognition.equivalence import PosedRings, near_pairs, pairs_within, screen_reach
 
 __all__ = ["JOIN_POINTS", "join_classes"]
 
@@ -85,7 +85,7 @@ def join_classes(
     starts = np.searchsorted(label[by_class], np.arange(count + 1))
     leaders = by_class[starts[:-1]]
     # a margin for rounding: the filter must never drop a pair that passes
-    reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max()))
+    reach = screen_reach(tau, support)
     near = _near_leaders(support[leaders], reach)
     size = np.diff(starts)
     points_of = np.add.reduceat(points[by_class], starts[:-1])
@@ -140,8 +140,7 @@ def _near_leaders(support: np.ndarray, reach: float) -> np.ndarray:
     `reach` of each other, sorted: the tree's pairs, or every pair screened at once
     for a few classes."""
     if len(support) <= TREE_FROM:
-        i, j = np.triu_indices(len(support), 1)
-        near = np.column_stack([i, j])[np.abs(support[i] - support[j]).max(axis=1) <= reach]
+        near = near_pairs(support, reach)
     else:
         near = cKDTree(support).query_pairs(reach, p=np.inf, output_type="ndarray")
     return near[np.lexsort((near[:, 1], near[:, 0]))]

@@ -68,10 +68,13 @@ __all__ = [
     "SYMMETRY_FLOOR",
     "PosedRings",
     "equivalence_classes",
+    "near_pairs",
     "none_can_share",
     "outline_distance",
     "pair_distances",
     "pairs_within",
+    "screen_reach",
+    "support_values",
     "within",
 ]
 
@@ -155,7 +158,7 @@ class PosedRings:
         steps = inside.astype(np.int64) + 1
         along = _along(a, b, steps, ends=False)  # the next face's start is this one's end
         starts = move(a)
-        support = (starts @ SUPPORT_DIRECTIONS.T).max(axis=1)
+        support = support_values(starts)
         gap = float((length / steps).max(initial=0.0))
         return cls(move(along), starts, move(b), support, theta, t, a, b, gap)
 
@@ -283,7 +286,7 @@ def equivalence_classes(
     first = int(order[0])
     keys = _screen_keys(rings, (int(group[first]), int(local[first])), tau)
     # a margin for rounding: the filter must never drop a pair that passes
-    reach = tau / 2 * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(keys).max()))
+    reach = screen_reach(tau / 2, keys)
     # pairs first found in a few of the keys (a tree in all of them is slow), then
     # held to all: the same pairs as one tree over every key
     low = keys[:, FIRST_KEYS]
@@ -324,22 +327,37 @@ def none_can_share(
         return False
     support = np.concatenate(
         [
-            (
-                (
-                    rotate(rotation_matrices(np.asarray(th, dtype=float)), stable.faces.start)
-                    + np.asarray(tt, dtype=float).reshape(-1, 2)[:, None, :]
-                )
-                @ SUPPORT_DIRECTIONS.T
-            ).max(axis=1)
+            support_values(
+                rotate(rotation_matrices(np.asarray(th, dtype=float)), stable.faces.start)
+                + np.asarray(tt, dtype=float).reshape(-1, 2)[:, None, :]
+            )
             for stable, th, tt in zip(stables, theta, t, strict=True)
         ]
     )
     shape = np.repeat(np.asarray(shapes), sizes)
-    i, j = np.triu_indices(n, 1)
-    reach = tau * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(support).max(initial=0.0)))
-    could = (family[i] != family[j]) & (shape[i] == shape[j])
-    could &= np.abs(support[i] - support[j]).max(axis=1, initial=0.0) <= reach
-    return not could.any()
+    i, j = near_pairs(support, screen_reach(tau, support)).T
+    return not ((family[i] != family[j]) & (shape[i] == shape[j])).any()
+
+
+def support_values(vertices: np.ndarray) -> np.ndarray:
+    """(N, K) the support function of each posed outline's vertices (N, P, 2) in
+    the directions of :data:`SUPPORT_DIRECTIONS`: outlines within d of each other
+    have support values within d."""
+    return (vertices @ SUPPORT_DIRECTIONS.T).max(axis=1)
+
+
+def screen_reach(limit: float, values: np.ndarray) -> float:
+    """How far apart screening values (support values, keys) may lie for outlines
+    within `limit`: the limit with a margin for rounding, so that a screen never
+    drops a pair the measure would pass."""
+    return limit * (1 + 1e-9) + 1e-12 * (1.0 + float(np.abs(values).max(initial=0.0)))
+
+
+def near_pairs(values: np.ndarray, reach: float) -> np.ndarray:
+    """(M, 2) the pairs i < j of rows of `values` (N, K) within `reach` of each
+    other in every column, in order: every pair screened at once (a few rows)."""
+    i, j = np.triu_indices(len(values), 1)
+    return np.column_stack([i, j])[np.abs(values[i] - values[j]).max(axis=1, initial=0.0) <= reach]
 
 
 def _numbered(label: np.ndarray, order: np.ndarray) -> np.ndarray:

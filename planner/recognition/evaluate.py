@@ -137,17 +137,25 @@ class _Contacts:
 
     @classmethod
     def of(cls, observations: list[Observation], variants: Variants | None = None) -> _Contacts:
-        if variants is not None:
-            lists = [cls.of([*observations, o]) for o in variants.last]
+        if variants is not None:  # the shared contacts read once, then each row's own
+            shared = cls.of(observations)
+            last = cls.of(list(variants.last))  # one contact each
             row = np.concatenate(variants.of_rows).astype(np.int64)
-            return cls(*(np.stack([getattr(c, f) for c in lists])[row] for f in _FIELDS))
+
+            def then(f: str) -> np.ndarray:
+                head, own = getattr(shared, f), getattr(last, f)[row, None]
+                return np.concatenate([np.broadcast_to(head, (len(row), *head.shape)), own], 1)
+
+            return cls(*(then(f) for f in _FIELDS))
         contacts = [o.contact for o in observations if o.contact is not None]
-        normals = np.array([c.normal for c in contacts])
+        normals = np.array([c.normal for c in contacts], dtype=float).reshape(-1, 2)
         return cls(
-            np.array([c.point for c in contacts]),
+            np.array([c.point for c in contacts], dtype=float).reshape(-1, 2),
             normals,
             np.arctan2(normals[:, 1], normals[:, 0]),
-            np.array([o.path.direction for o in observations if o.contact is not None]),
+            np.array(
+                [o.path.direction for o in observations if o.contact is not None], dtype=float
+            ).reshape(-1, 2),
         )
 
     @property

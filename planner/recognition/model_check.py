@@ -287,13 +287,10 @@ def clear_paths(
     groups = [group] if which is None else list(group)  # type: ignore[arg-type]
     which = np.zeros(len(keep), np.int64) if which is None else np.asarray(which)
     keep = keep.copy()
-    lists = [observations] if variants is None else [[*observations, o] for o in variants.last]
-    if not lists[0] or not keep.any():
+    if not (observations or variants) or not keep.any():
         return keep
     of = np.zeros(len(keep), np.int64) if variants is None else np.asarray(variants.of)
-    paths = [_paths(o, groups, back) for o in lists]
-    origin, direction, length, layer = (np.stack([p[i] for p in paths]) for i in range(4))
-    hit = paths[0][4]
+    origin, direction, length, layer, hit = _paths(observations, groups, back, variants)
     layers = int(layer.max(initial=0)) + 1
     # which rows check which path: a missed path always, a contact's path where
     # the row assigns that contact to a face
@@ -324,19 +321,45 @@ def clear_paths(
 
 
 def _paths(
-    observations: list[Observation], groups: Sequence[Group], back: float
+    observations: list[Observation],
+    groups: Sequence[Group],
+    back: float,
+    variants: PathVariants | None = None,
 ) -> tuple[np.ndarray, ...]:
-    """Each observation's path as the free-space check runs it: origin, direction,
-    the length checked (up to the contact less `back`, or whole), the layer of each
-    group it runs at (G, O), and whether it met a contact."""
-    origin = np.array([o.path.origin for o in observations], dtype=float)
-    direction = np.array([o.path.direction for o in observations], dtype=float)
-    hit = np.array([o.contact is not None for o in observations])
+    """Each observation's path as the free-space check runs it, per variant (one
+    without `variants`; each variant's last path after the shared ones): origin,
+    direction (V, O, 2), the length checked (V, O: up to the contact less `back`,
+    or whole), the layer of each group it runs at (V, G, O), and whether it met a
+    contact (O,). The shared paths are read once."""
+    origin = np.array([o.path.origin for o in observations], dtype=float).reshape(-1, 2)
+    direction = np.array([o.path.direction for o in observations], dtype=float).reshape(-1, 2)
+    hit = np.array([o.contact is not None for o in observations], dtype=bool)
     length = np.array([o.path.length for o in observations], dtype=float)
     points = np.array([o.contact.point if o.contact else (0.0, 0.0) for o in observations])
+    points = points.reshape(-1, 2)
     length[hit] = np.einsum("ki,ki->k", points[hit] - origin[hit], direction[hit]) - back
-    layer = np.array([[g.stable.layer_index(o.path.height) for o in observations] for g in groups])
-    return origin, direction, length, layer, hit
+    layer = np.array(
+        [[g.stable.layer_index(o.path.height) for o in observations] for g in groups],
+        dtype=np.int64,
+    ).reshape(len(groups), -1)
+    if variants is None:
+        return origin[None], direction[None], length[None], layer[None], hit
+    last = _paths(list(variants.last), groups, back)
+    if not last[4].all():
+        raise ValueError("every variant's last observation must be a contact")
+    n = len(variants.last)
+
+    def then(shared: np.ndarray, own: np.ndarray, axis: int) -> np.ndarray:
+        """The shared paths' values for every variant, then the variant's own."""
+        return np.concatenate([np.broadcast_to(shared, (n, *shared.shape)), own], axis)
+
+    return (
+        then(origin, last[0][0][:, None], 1),
+        then(direction, last[1][0][:, None], 1),
+        then(length, last[2][0][:, None], 1),
+        then(layer, last[3][0].T[:, :, None], 2),
+        np.append(hit, True),
+    )
 
 
 #: Ratio of the geometric grid the free-space shrinks are rounded onto.

@@ -324,15 +324,16 @@ class Session:
         when no two can share one (:func:`~planner.recognition.equivalence.
         none_can_share`, without measuring their outlines: most of a plan's
         predicted sessions), else counted from :attr:`hypotheses`."""
-        cands = [c for c in self._derived.candidates if len(c.weight)]
-        n = sum(len(c.weight) for c in cands)
-        if n > 1 and "_ranked" not in self.__dict__ and self._apart(cands):
+        n = self.hypothesis_count
+        if n > 1 and "_ranked" not in self.__dict__ and self._apart:
             return n
         return len({h.equivalence_class for h in self.hypotheses})
 
-    def _apart(self, cands: list[PoseSamples]) -> bool:
+    @cached_property
+    def _apart(self) -> bool:
         """No two hypotheses can share a class (:func:`~planner.recognition.
         equivalence.none_can_share` at one probing height: apart there, apart)."""
+        cands = [c for c in self._derived.candidates if len(c.weight)]
         z = probing_heights(self.models)[0]
         return none_can_share(
             [self._stable(c, z) for c in cands], [c.theta for c in cands],
@@ -425,7 +426,7 @@ class Session:
         as the leaders come (most probable first), found without the classes."""
         tau = self.symmetry_tolerance
         order = np.argsort(-prob, kind="stable")
-        if self._apart(cands):
+        if self._apart:  # the candidates `cands` are the derived state's
             place = np.empty(len(prob), dtype=np.int64)
             place[order] = np.arange(len(prob))
             return place, np.zeros(len(prob), dtype=bool)

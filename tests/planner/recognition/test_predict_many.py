@@ -83,3 +83,18 @@ def test_the_class_count_is_the_number_of_classes(name, seed, touches):
     for s in [session, *session.predict_many(observations)]:
         counted = s.class_count  # before the classes are found
         assert counted == len({h.equivalence_class for h in s.hypotheses})
+
+
+def test_predictions_after_misses_alone_are_those_observed_alone():
+    """A session that has only missed (no contact yet to share) predicts its first
+    contacts together as it would one by one."""
+    bounds = SensorBounds(1.0, math.radians(3))
+    rng = np.random.default_rng(5)
+    world = random_world(object_set("thesis_like"), WORKSPACE, rng)
+    session = Session(object_set("thesis_like"), bounds, WORKSPACE)
+    session = session.observe(Observation(SensingPath((0.0, 250.0), (0.0, 1.0), 50.0), None))
+    observations = [world.execute(world.hitting_path(rng), bounds, rng)[0] for _ in range(3)]
+    together = session.predict_many(observations)
+    assert all(s is not None and s.hypotheses for s in together)
+    for observation, predicted in zip(observations, together, strict=True):
+        assert _state(predicted) == _state(session.predict(observation))
