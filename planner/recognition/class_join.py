@@ -76,7 +76,7 @@ def join_classes(
     group = np.repeat(np.arange(len(rings)), sizes)
     local = np.arange(n) - offsets[group]
     support = np.concatenate([r.support for r in rings])
-    points = np.array([r.points.shape[1] for r in rings])[group]
+    points = np.array([len(r.model_points) for r in rings])[group]
     # the members of each class in `order` (one sort, not a pass per class): the
     # first is its leader
     place = np.empty(n, dtype=np.int64)

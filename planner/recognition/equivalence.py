@@ -57,6 +57,7 @@ import numpy as np
 from scipy.spatial import cKDTree
 
 from planner.geometry import rotate, rotation_matrices
+from planner.memo import cached_property
 from planner.recognition.outline_kernel import nearest_face_distances, pair_outline_distances
 from planner.types import StablePose
 
@@ -116,20 +117,24 @@ FIRST_KEYS = np.array([0, 3, 6, 9, len(SUPPORT_DIRECTIONS) + PROBE_GRID**2 // 2,
 
 @dataclass(frozen=True, eq=False)
 class PosedRings:
-    """Posed outlines of N hypotheses of one stable pose: `points` (N, P, 2) on the
-    boundary in the world frame (every vertex and up to `EDGE_SAMPLES` points
-    inside each face), `starts`/`ends` (N, F, 2) of every face, and `support`
-    (N, K): the support function of the vertices in the K directions of
-    :data:`SUPPORT_DIRECTIONS`; the poses `theta` (N,) and `t` (N, 2), the stable
-    pose's faces in its model frame, `model_starts`/`model_ends` (F, 2), and `gap`:
-    the longest step between two consecutive points along a face."""
+    """Posed outlines of N hypotheses of one stable pose: `model_points` (P, 2) on
+    the boundary in the model frame (every vertex and up to `EDGE_SAMPLES` points
+    inside each face; :attr:`points` posed, (N, P, 2)), `starts`/`ends` (N, F, 2)
+    of every face in the world frame, and `support` (N, K): the support function
+    of the vertices in the K directions of :data:`SUPPORT_DIRECTIONS`; the poses
+    `theta` (N,) and `t` (N, 2) and their `rotations` (N, 2, 2), the stable pose's
+    faces in its model frame, `model_starts`/`model_ends` (F, 2), and `gap`: the
+    longest step between two consecutive points along a face. The points are
+    posed where they are measured (:mod:`planner.recognition.outline_kernel`),
+    the same numbers as :attr:`points`: most pairs are decided on a few of them."""
 
-    points: np.ndarray
+    model_points: np.ndarray
     starts: np.ndarray
     ends: np.ndarray
     support: np.ndarray
     theta: np.ndarray
     t: np.ndarray
+    rotations: np.ndarray
     model_starts: np.ndarray
     model_ends: np.ndarray
     gap: float
@@ -146,10 +151,6 @@ class PosedRings:
         theta = np.asarray(theta, dtype=float).reshape(-1)
         R = rotation_matrices(theta)
         t = np.asarray(t, dtype=float).reshape(-1, 2)
-
-        def move(points: np.ndarray) -> np.ndarray:
-            return rotate(R, points) + t[:, None, :]
-
         faces = stable.faces
         a, b = np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float)
         length = np.hypot(*(b - a).T)
@@ -157,19 +158,34 @@ class PosedRings:
         inside = np.minimum(EDGE_SAMPLES, room)
         steps = inside.astype(np.int64) + 1
         along = _along(a, b, steps, ends=False)  # the next face's start is this one's end
-        starts = move(a)
+        starts = _moved(R, a, t)
         support = support_values(starts)
         gap = float((length / steps).max(initial=0.0))
-        return cls(move(along), starts, move(b), support, theta, t, a, b, gap)
+        return cls(along, starts, _moved(R, b, t), support, theta, t, R, a, b, gap)
 
     def __len__(self) -> int:
         return len(self.support)
+
+    @cached_property
+    def points(self) -> np.ndarray:
+        """(N, P, 2) the boundary points posed."""
+        return _moved(self.rotations, self.model_points, self.t)
+
+    def posed_points(self, row: int) -> np.ndarray:
+        """(P, 2) hypothesis `row`'s boundary points posed (a row of :attr:`points`)."""
+        return _moved(self.rotations[row : row + 1], self.model_points, self.t[row : row + 1])[0]
 
     def to_model(self, points: np.ndarray, rows: np.ndarray) -> np.ndarray:
         """World points (M, P, 2) into the model frame of hypotheses `rows` (M,):
         ``v_model = R(theta)^T (v_world - t)``."""
         R = rotation_matrices(self.theta[rows])
         return rotate(R.transpose(0, 2, 1), points - self.t[rows, None, :])
+
+
+def _moved(R: np.ndarray, points: np.ndarray, t: np.ndarray) -> np.ndarray:
+    """``R v + t`` (N, P, 2) of model points (P, 2) for rotations R (N, 2, 2) and
+    translations t (N, 2): the arithmetic the pair kernel repeats point by point."""
+    return rotate(R, points) + t[:, None, :]
 
 
 def _along(a: np.ndarray, b: np.ndarray, steps: np.ndarray, *, ends: bool) -> np.ndarray:
@@ -191,7 +207,7 @@ def outline_distance(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray) -> 
 
 def pair_distances(a: PosedRings, ia: np.ndarray, b: PosedRings, ib: np.ndarray) -> np.ndarray:
     """(M,) :func:`outline_distance` of each pair: hypothesis ia[m] of `a` and ib[m] of `b`."""
-    return pair_outline_distances(a.points, a.starts, a.ends, ia, b.points, b.starts, b.ends, ib)
+    return pair_outline_distances(_kernel_args(a), ia, _kernel_args(b), ib)
 
 
 def within(a: PosedRings, i: int, b: PosedRings, rows: np.ndarray, limit: float) -> np.ndarray:
@@ -207,10 +223,12 @@ def pairs_within(
     as far as the answer needs (:mod:`planner.recognition.outline_kernel`)."""
     if not math.isfinite(limit) or limit < 0:
         return np.full(len(ia), limit >= 0, dtype=bool)
-    found = pair_outline_distances(
-        a.points, a.starts, a.ends, ia, b.points, b.starts, b.ends, ib, limit
-    )
+    found = pair_outline_distances(_kernel_args(a), ia, _kernel_args(b), ib, limit)
     return found <= limit
+
+
+def _kernel_args(r: PosedRings) -> tuple[np.ndarray, ...]:
+    return r.model_points, r.rotations, r.t, r.starts, r.ends
 
 
 def _probe_distances(rings: Sequence[PosedRings], probes: np.ndarray) -> np.ndarray:
@@ -229,7 +247,7 @@ def _screen_keys(rings: Sequence[PosedRings], leader: tuple[int, int], tau: floa
     probe distances scaled so that the same reach (tau / 2) bounds both."""
     support = np.concatenate([r.support for r in rings])
     g, k = leader
-    points = rings[g].points[k]
+    points = rings[g].posed_points(k)
     # a grid over the outline's box (near a hole or a notch, a rotation shows) and
     # a few points along its boundary
     (x0, y0), (x1, y1) = points.min(axis=0), points.max(axis=0)

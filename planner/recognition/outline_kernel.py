@@ -40,16 +40,24 @@ def _segment_distance(px, py, ax, ay, bx, by):  # type: ignore[no-untyped-def]
 
 
 @numba.njit(cache=True, nogil=True)
-def _directed(points, starts, ends, floor, stop):  # type: ignore[no-untyped-def]
-    """``max_p min_f`` distance from `points` (P, 2) to the faces (F, 2 each),
-    exact up to `stop`: once a point lies farther than `stop` from every face,
-    that point's distance is returned. A point whose scan finds a face within
-    ``max(floor, largest so far)`` stops there (it cannot raise the answer)."""
+def _directed(points, R, t, i, starts, ends, floor, stop):  # type: ignore[no-untyped-def]
+    """``max_p min_f`` distance from the model `points` (P, 2) posed by rotation
+    R[i] and translation t[i] to the faces (F, 2 each), exact up to `stop`: once a
+    point lies farther than `stop` from every face, that point's distance is
+    returned. A point whose scan finds a face within ``max(floor, largest so
+    far)`` stops there (it cannot raise the answer). Each point is posed as it is
+    reached, ``(R00 x + R01 y) + tx``: the numbers the posed array holds."""
     n_faces = starts.shape[0]
+    r00, r01, r10, r11 = R[i, 0, 0], R[i, 0, 1], R[i, 1, 0], R[i, 1, 1]
+    tx, ty = t[i, 0], t[i, 1]
     largest = 0.0
     hint = 0
     for p in range(points.shape[0]):
-        px, py = points[p, 0], points[p, 1]
+        mx, my = points[p, 0], points[p, 1]
+        px = r00 * mx + r01 * my
+        py = r10 * mx + r11 * my
+        px = px + tx
+        py = py + ty
         enough = max(floor, largest)
         best = math.inf
         best_face = hint
@@ -72,30 +80,43 @@ def _directed(points, starts, ends, floor, stop):  # type: ignore[no-untyped-def
 
 
 @numba.njit(cache=True, nogil=True)
-def _pairs(a_points, a_starts, a_ends, ia, b_points, b_starts, b_ends, ib, floor, stop, out):  # type: ignore[no-untyped-def]
+def _pairs(
+    a_points,
+    a_R,
+    a_t,
+    a_starts,
+    a_ends,
+    ia,
+    b_points,
+    b_R,
+    b_t,
+    b_starts,
+    b_ends,
+    ib,
+    floor,
+    stop,
+    out,
+):  # type: ignore[no-untyped-def]
     for m in range(ia.shape[0]):
         i, j = ia[m], ib[m]
-        there = _directed(a_points[i], b_starts[j], b_ends[j], floor, stop)
+        there = _directed(a_points, a_R, a_t, i, b_starts[j], b_ends[j], floor, stop)
         if there > stop:
             out[m] = there
             continue
-        back = _directed(b_points[j], a_starts[i], a_ends[i], floor, stop)
+        back = _directed(b_points, b_R, b_t, j, a_starts[i], a_ends[i], floor, stop)
         out[m] = max(there, back)
 
 
 def pair_outline_distances(
-    a_points: np.ndarray,
-    a_starts: np.ndarray,
-    a_ends: np.ndarray,
+    a: tuple[np.ndarray, ...],
     ia: np.ndarray,
-    b_points: np.ndarray,
-    b_starts: np.ndarray,
-    b_ends: np.ndarray,
+    b: tuple[np.ndarray, ...],
     ib: np.ndarray,
     limit: float | None = None,
 ) -> np.ndarray:
     """(M,) the larger of the two directed distances between outline ia[m] of `a`
-    (points (N, P, 2), faces (N, F, 2 each)) and outline ib[m] of `b`: exact when
+    and outline ib[m] of `b`, each given as (model points (P, 2), rotations (N, 2,
+    2), translations (N, 2), posed face starts and ends (N, F, 2 each)): exact when
     `limit` is None; otherwise exact up to `limit` and some value above it for the
     pairs farther apart (all that ``<= limit`` needs, at a fraction of the work)."""
     ia = c_array(ia, dtype=np.int64)
@@ -103,11 +124,9 @@ def pair_outline_distances(
     out = np.zeros(len(ia))
     if len(ia):
         floor, stop = (0.0, math.inf) if limit is None else (float(limit), float(limit))
-        arrays = [
-            c_array(x, dtype=np.float64)
-            for x in (a_points, a_starts, a_ends, b_points, b_starts, b_ends)
-        ]
-        _pairs(*arrays[:3], ia, *arrays[3:], ib, floor, stop, out)
+        a_args = [c_array(x, dtype=np.float64) for x in a]
+        b_args = [c_array(x, dtype=np.float64) for x in b]
+        _pairs(*a_args, ia, *b_args, ib, floor, stop, out)
     return out
 
 
