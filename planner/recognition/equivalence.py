@@ -228,6 +228,8 @@ def pairs_within(
 
 
 def _kernel_args(r: PosedRings) -> tuple[np.ndarray, ...]:
+    """What the pair kernel measures outlines by: the model points and the poses
+    that move them, and the posed faces."""
     return r.model_points, r.rotations, r.t, r.starts, r.ends
 
 
