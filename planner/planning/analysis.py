@@ -178,7 +178,8 @@ def _at_height(
         if outcomes:  # past the first block, none starts that the budget cannot pay for
             if budget.exhausted():
                 break
-            take = min(take, int(budget.affordable("outcome_cell") / (per_cell * len(posed))))
+            affordable = budget.affordable("outcome_cell") / (per_cell * len(posed))
+            take = take if affordable >= take else int(affordable)  # inf: no work limit
             if take < 1:
                 break
         part = cands.subset(np.arange(lo, min(lo + take, len(cands))))

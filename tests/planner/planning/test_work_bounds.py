@@ -118,3 +118,19 @@ def test_no_block_of_paths_starts_past_what_the_budget_can_pay_for(work):
     per_path = _per_path(posed)
     assert found.truncated and len(found.candidates) > 16  # several blocks, cut
     assert budget.units <= work + per_path
+
+
+def test_a_wall_clock_cap_without_a_work_budget_analyses_every_path():
+    # `tactile simulate --budget-work 0` (no work limit) kept the default wall-clock
+    # cap; the blocks after the first were sized by the infinite work left
+    session = Session(
+        object_set("thesis_like"), SensorBounds(1.0, math.radians(3)), Workspace((0, 0), 200)
+    )
+    session = session.observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -20), (0, -1)))
+    )
+    budget = Budget(work=None, cap_ms=3_600_000.0)
+    assert not budget.unlimited
+    found = _analysed(session, budget)
+    assert not found.truncated
+    assert len(found.candidates) == len(_analysed(session, Budget()).candidates)
