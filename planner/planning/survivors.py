@@ -72,23 +72,41 @@ def pin_families(
     shared = siblings[0][siblings[1] > 1]
     if not len(shared):
         return bits
+    # every ordered pair (a, b) of samples of one shared family, all families at once
+    hs = np.flatnonzero(solo & np.isin(family, shared))
+    hs = hs[np.argsort(family[hs], kind="stable")]
+    starts = np.searchsorted(family[hs], shared)
+    sizes = np.diff(np.append(starts, len(hs)))
+    a, b = _pairs_within_runs(starts, sizes)
+    a, b = hs[a], hs[b]
+    # a path pins a sample where it surely meets a face not parallel to its family's
+    un = u[hs[np.repeat(starts, sizes)]]  # (S, 2): each sample's family's touched normal
+    hit_n = outcomes.normal[:, hs]  # (C, S, 2)
+    sure = outcomes.hit[:, hs] & ~outcomes.uncertain[:, hs]
+    pins = sure & (np.abs(hit_n[..., 0] * un[:, 1] - hit_n[..., 1] * un[:, 0]) > tol)
+    pinned = np.zeros(len(hypotheses), dtype=np.int64)
+    pinned[hs] = np.arange(len(hs))
+    ia, ib = pinned[a], pinned[b]
+    # on path c, sample a's class no longer survives with sample b's class
+    same = (outcomes.face[:, a] == outcomes.face[:, b]) & pins[:, ia] & pins[:, ib]
+    c, m = np.nonzero(same)
+    k = posed.cls
+    bit = np.left_shift(np.uint64(1), (k[b[m]] % 64).astype(np.uint64))
     bits = bits.copy()
-    sure = outcomes.hit & ~outcomes.uncertain  # (C, H)
-    for f in shared:
-        hs = np.flatnonzero(solo & (family == f))
-        hit_n = outcomes.normal[:, hs]  # (C, S, 2)
-        un = u[hs[0]]  # the family's touched faces are all parallel to it
-        pins = sure[:, hs] & (np.abs(hit_n[..., 0] * un[1] - hit_n[..., 1] * un[0]) > tol)
-        same = (outcomes.face[:, hs, None] == outcomes.face[:, None, hs]) & (
-            pins[:, :, None] & pins[:, None, :]
-        )  # (C, S, S): the sample pair is pinned apart on that path
-        same[:, np.arange(len(hs)), np.arange(len(hs))] = False
-        # on path c, sample a's class no longer survives with sample b's class
-        c, a, b = np.nonzero(same)
-        k = posed.cls[hs]
-        bit = np.left_shift(np.uint64(1), (k[b] % 64).astype(np.uint64))
-        np.bitwise_and.at(bits, (c, k[a], k[b] // 64), ~bit)
+    np.bitwise_and.at(bits, (c, k[a[m]], k[b[m]] // 64), ~bit)
     return bits
+
+
+def _pairs_within_runs(starts: np.ndarray, sizes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Every ordered pair (i, j), i != j, of places within each run (run r holds
+    places ``starts[r] .. starts[r] + sizes[r] - 1``)."""
+    n = sizes * sizes
+    run = np.repeat(np.arange(len(sizes)), n)
+    at = np.arange(int(n.sum())) - np.repeat(np.cumsum(n) - n, n)
+    i = starts[run] + at // sizes[run]
+    j = starts[run] + at % sizes[run]
+    keep = i != j
+    return i[keep], j[keep]
 
 
 def repeated_paths(

@@ -458,3 +458,63 @@ def test_the_buckets_find_every_face_that_blocks_an_aim(name, monkeypatch):
     assert len(found[0]) > 0
     np.testing.assert_array_equal(found[0], measured[0])
     np.testing.assert_array_equal(found[1], measured[1])
+
+
+def _pin_families_one_by_one(hypotheses, posed, outcomes, bits, sensor):
+    """The law family by family and pair by pair: on path c, sample a of a slide
+    family (one interpretation, every touched face parallel, each sample a class of
+    its own) no longer survives with sample b where the path surely meets both on
+    one face not parallel to the family's."""
+    tol = math.sin(2 * sensor.normal_error + 1e-6)
+    n = np.nan_to_num(posed.touched)
+    assigned = np.array([[-1 if a is None else a for a in h.assignment] for h in hypotheses])
+    members = np.bincount(posed.cls, minlength=posed.n_classes)
+    families: dict[tuple, list[int]] = {}
+    for i, h in enumerate(hypotheses):
+        on = assigned[i] >= 0
+        u = n[i, np.argmax(on)]
+        cross = np.abs(n[i, :, 0] * u[1] - n[i, :, 1] * u[0])
+        if on.any() and np.all(~on | (cross <= tol)) and members[posed.cls[i]] == 1:
+            key = (h.interpretation, h.object, h.stable_pose, tuple(assigned[i]))
+            families.setdefault(key, []).append(i)
+    out = bits.copy()
+    sure = outcomes.hit & ~outcomes.uncertain
+    for hs in families.values():
+        u = n[hs[0], np.argmax(assigned[hs[0]] >= 0)]
+
+        def pins(c: int, h: int, u: np.ndarray = u) -> bool:
+            hit_n = outcomes.normal[c, h]
+            return bool(sure[c, h] and abs(hit_n[0] * u[1] - hit_n[1] * u[0]) > tol)
+
+        for a, b in ((a, b) for a in hs for b in hs if a != b):
+            for c in range(len(outcomes.hit)):
+                if outcomes.face[c, a] == outcomes.face[c, b] and pins(c, a) and pins(c, b):
+                    kb = int(posed.cls[b])
+                    out[c, posed.cls[a], kb // 64] &= ~np.uint64(1 << (kb % 64))
+    return out
+
+
+def test_slide_families_are_pinned_as_one_family_at_a_time_would_be(monkeypatch):
+    """All families' pins in one pass clear the bits the law clears family by
+    family, on the first plan of a set whose first touch leaves slide families."""
+    from planner.planning import analysis
+    from planner.planning.plan import plan_session
+    from planner.recognition.session import Session
+    from tests.conftest import WORKSPACE, object_set
+
+    cleared = []
+    real = analysis.pin_families
+
+    def check(hypotheses, posed, outcomes, bits, sensor):
+        got = real(hypotheses, posed, outcomes, bits, sensor)
+        want = _pin_families_one_by_one(hypotheses, posed, outcomes, bits, sensor)
+        np.testing.assert_array_equal(got, want)
+        cleared.append(int((got != bits).sum()))
+        return got
+
+    monkeypatch.setattr(analysis, "pin_families", check)
+    session = Session(object_set("workshop"), SensorBounds(1, 0.05), WORKSPACE).observe(
+        Observation(SensingPath((0, -200), (0, 1), 400), Contact((0, -30), (0, -1)))
+    )
+    plan_session(session, (200.0, 0.0), StrategyConfig(name="pdm", budget_work=None), 0)
+    assert cleared and max(cleared) > 0, "no family was pinned: the check saw nothing"
