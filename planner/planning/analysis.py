@@ -170,16 +170,14 @@ def _at_height(
     if budget.unlimited:
         block = len(cands)
     else:  # the first block too keeps to what the budget has left (at least one path)
-        affordable = budget.affordable("outcome_cell") / (per_cell * len(posed))
-        block = size if affordable >= size else max(1, int(affordable))
+        block = max(1, budget.at_most("outcome_cell", size, per_cell * len(posed)))
     lo = 0
     while lo < len(cands) or not outcomes:
         take = max(block, 1)
         if outcomes:  # past the first block, none starts that the budget cannot pay for
             if budget.exhausted():
                 break
-            affordable = budget.affordable("outcome_cell") / (per_cell * len(posed))
-            take = take if affordable >= take else int(affordable)  # inf: no work limit
+            take = budget.at_most("outcome_cell", take, per_cell * len(posed))
             if take < 1:
                 break
         part = cands.subset(np.arange(lo, min(lo + take, len(cands))))

@@ -54,10 +54,9 @@ def boundary_aims(
     plan = _PairPlan.of(posed, sensor)
     total, limit = len(fh) * face_samples, 8 * count
     if budget is not None:
-        affordable = budget.affordable("aim_pair") / plan.per_point
-        if affordable < 1:  # not even one point's pairs: none examined
+        if budget.at_most("aim_pair", 1, plan.per_point) < 1:  # not one point's pairs
             return np.zeros((0, 2)), np.zeros((0, 2))
-        limit = limit if affordable >= limit else int(affordable)
+        limit = budget.at_most("aim_pair", limit, plan.per_point)
     if total > limit:
         flat = np.sort(rng.choice(total, size=limit, replace=False))
     else:

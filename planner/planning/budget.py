@@ -83,6 +83,19 @@ class Budget:
         the stages that can be told their cost in advance size themselves by it."""
         return max(0.0, self.work - self.units) / UNIT_US[kind]
 
+    def at_most(self, kind: str, wanted: int, per: float = 1.0) -> int:
+        """How many of `wanted` steps, each `per` items of `kind`, the work budget
+        pays for: all of them when it can (always when unlimited), else the whole
+        number it can.
+
+        >>> Budget().at_most("outcome_cell", 7), Budget(work=0).at_most("outcome_cell", 7)
+        (7, 0)
+        >>> Budget(work=3.5 * UNIT_US["outcome_cell"]).at_most("outcome_cell", 7)
+        3
+        """
+        affordable = self.affordable(kind) / per
+        return wanted if affordable >= wanted else int(affordable)
+
     def spend_updates(self, count: int, hypotheses: float) -> None:
         """`count` recognition updates of a session carrying `hypotheses` hypotheses."""
         self.spend("recognition_update", count)
