@@ -176,12 +176,12 @@ def extend_many(
 #: one contact are folded into one (DESIGN §4.3): every contact near the end of a
 #: chord of a finely drawn curve fits two chords, and without folding the rows of a
 #: curved part double with such contacts (an ellipse touched 37 times held 19,068).
-#: At 64, twelve 40-touch curved sessions' slowest touch took 24 ms (median), 18 at 32.
+#: Folding past fewer rows keeps a long session's late updates near its first ones
+#: (README, update time against earlier observations).
 FOLD_ROWS = 32
 #: Contacts a row keeps assigned besides the one folded: they pin its pose (three
 #: contacts with their normals fix a planar pose; one more keeps it fixed when one of
-#: them lies near a face's end). At 8, a curved part touched 9 times carried 99
-#: hypotheses on average, 58 at 4, and its late updates took 2.3 times the first.
+#: them lies near a face's end).
 FOLD_PINNED = 4
 #: Most faces (first to last, one ring) the rows folded at one contact may name.
 FOLD_SPAN = 3
