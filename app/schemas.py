@@ -148,16 +148,25 @@ class AccuracyOut(BaseModel):
 
 class LocalizationOut(BaseModel):
     """How far the session is from `localized` (one class AND its bound within the
-    accuracy): the classes left, the most probable class' bound, what is missing."""
+    accuracy, or classes that are one answer within it): the classes left, the
+    answer's bound, what is missing."""
 
     classes: int = Field(ge=0)
     bound: ErrorBoundOut | None = Field(
-        description="the most probable class' bound: its widest member's, widened by the "
-        "symmetry tolerance; null without a hypothesis"
+        description="the answer's bound: the most probable class' (its widest member's, "
+        "widened by the symmetry tolerance), or, when the classes left are one answer, "
+        "the bound covering them all; null without a hypothesis"
     )
     missing: list[Literal["one_class", "accuracy"]] = Field(
-        description="empty when localized; one_class while several classes are left, "
-        "accuracy while the bound exceeds the session's accuracy"
+        description="empty when localized; one_class while several classes are left that "
+        "are not one answer within the accuracy, accuracy while the bound exceeds it"
+    )
+    covered: int = Field(
+        default=1,
+        ge=0,
+        description="how many classes the bound covers: more than one when the classes "
+        "left are the same part in nearby poses and one bound within the accuracy holds "
+        "them all (a curved part, whose consistent poses may never narrow to one class)",
     )
     rotation_free: bool = Field(
         default=False,

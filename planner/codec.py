@@ -267,9 +267,10 @@ def prior_from_dict(data: Mapping[str, Any] | None) -> PosePrior | None:
 
 
 def localization_to_dict(loc: Localization) -> dict[str, Any]:
-    """How far the session is from `localized`: classes left, the most probable
-    class' bound (null without a hypothesis), what is missing (``one_class``,
-    ``accuracy``), and whether the rotation is free (a round outline's)."""
+    """How far the session is from `localized`: classes left, the answer's bound
+    (null without a hypothesis), what is missing (``one_class``, ``accuracy``),
+    whether the rotation is free (a round outline's), how many classes the bound
+    covers."""
     bound = None
     if loc.bound is not None:
         bound = {
@@ -282,6 +283,7 @@ def localization_to_dict(loc: Localization) -> dict[str, Any]:
         "bound": bound,
         "missing": list(loc.missing),
         "rotation_free": bool(loc.rotation_free),
+        "covered": int(loc.covered),
     }
 
 

@@ -205,8 +205,8 @@ def plan(
         probe = _opening(config, models, workspace, sensor_position, observations, gen, session)
         return finish("awaiting_contact", (probe,))
     classes = len({h.equivalence_class for h in hypotheses})
-    if classes == 1 and localized is not False:
-        return finish("localized", (), classes=1)
+    if localized or (classes == 1 and localized is None):
+        return finish("localized", (), classes=classes)
     found = analyse(
         hypotheses,
         models,

@@ -23,7 +23,6 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass
 from typing import Literal
 
 import numpy as np
@@ -54,6 +53,7 @@ from planner.recognition.equivalence import (
     none_can_share,
 )
 from planner.recognition.evaluate import PoseSamples, evaluate_groups
+from planner.recognition.localization import Localization, answer_bound, class_bound
 from planner.recognition.tree import Group, TreeLevel, extend, face_of, make_groups
 from planner.types import (
     Accuracy,
@@ -71,23 +71,6 @@ from planner.types import (
 __all__ = ["Localization", "Session", "Status"]
 
 Status = Literal["awaiting_contact", "ambiguous", "localized", "inconsistent"]
-
-
-@dataclass(frozen=True)
-class Localization:
-    """How far a session is from `localized` (DESIGN §2): the number of equivalence
-    `classes` left, the `bound` of the most probable class (None without a
-    hypothesis), the required `accuracy`, and what is `missing`: ``one_class``
-    while several classes are left, ``accuracy`` while the bound exceeds it.
-    `rotation_free` when the class' outline is round (:mod:`planner.models.round`):
-    its rotation cannot be measured and need not be, the bound's rotation is then
-    pi and the accuracy asks for the translation only."""
-
-    classes: int
-    bound: ErrorBound | None
-    accuracy: Accuracy
-    missing: tuple[str, ...]
-    rotation_free: bool = False
 
 
 class Session:
@@ -452,7 +435,8 @@ class Session:
     @property
     def status(self) -> Status:
         """``localized`` when one equivalence class is left AND its bound is within
-        the session's accuracy; ``ambiguous`` while either is missing."""
+        the session's accuracy, or the classes left are one answer within it
+        (:mod:`planner.recognition.localization`); ``ambiguous`` otherwise."""
         if not self.contacts:
             return "awaiting_contact"
         if not self.hypotheses:
@@ -462,7 +446,7 @@ class Session:
     @cached_property
     def localization(self) -> Localization:
         """How far the session is from `localized`: classes left, the bound of the
-        most probable class, and what is missing."""
+        answer, and what is missing (:mod:`planner.recognition.localization`)."""
         hyps = self.hypotheses
         classes = len({h.equivalence_class for h in hyps})
         if not hyps:
@@ -476,15 +460,22 @@ class Session:
         half = 0.0 if len(members) == 1 else half
         # a round outline's rotation is free: every rotation is one class
         free = all(self._round_poses[h.object][h.stable_pose] for h in members)
-        bound = ErrorBound(
-            max(h.error_bound.translation for h in members) + half,
-            math.pi if free else max(h.error_bound.rotation for h in members),
-            max(h.error_bound.eps_t for h in members) + 2 * half,
-        )
+        bound = class_bound(members, half, free)
+        if classes > 1:
+            union = answer_bound(
+                hyps, bound, self.accuracy, self._layers, self.symmetry_tolerance, free
+            )
+            if union is not None:  # the classes left are one answer
+                return Localization(classes, union, self.accuracy, (), free, classes)
         missing = (() if classes == 1 else ("one_class",)) + (
             () if self.accuracy.admits(bound, rotation_free=free) else ("accuracy",)
         )
         return Localization(classes, bound, self.accuracy, missing, free)
+
+    def _layers(self, name: str, stable_pose: int) -> list[StablePose]:
+        """The outline of an object's stable pose at every probing height."""
+        stable = self.models_by_name[name].stable_poses[stable_pose]
+        return [stable.layer(z) for z in probing_heights(self.models)]
 
     @cached_property
     def _round_poses(self) -> dict[str, list[bool]]:

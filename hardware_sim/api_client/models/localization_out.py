@@ -26,14 +26,19 @@ T = TypeVar("T", bound="LocalizationOut")
 @_attrs_define
 class LocalizationOut:
     """ How far the session is from `localized` (one class AND its bound within the
-    accuracy): the classes left, the most probable class' bound, what is missing.
+    accuracy, or classes that are one answer within it): the classes left, the
+    answer's bound, what is missing.
 
         Attributes:
-            bound (ErrorBoundOut | None): the most probable class' bound: its widest member's, widened by the symmetry
-                tolerance; null without a hypothesis
+            bound (ErrorBoundOut | None): the answer's bound: the most probable class' (its widest member's, widened by the
+                symmetry tolerance), or, when the classes left are one answer, the bound covering them all; null without a
+                hypothesis
             classes (int):
-            missing (list[LocalizationOutMissingItem]): empty when localized; one_class while several classes are left,
-                accuracy while the bound exceeds the session's accuracy
+            missing (list[LocalizationOutMissingItem]): empty when localized; one_class while several classes are left that
+                are not one answer within the accuracy, accuracy while the bound exceeds it
+            covered (int | Unset): how many classes the bound covers: more than one when the classes left are the same part
+                in nearby poses and one bound within the accuracy holds them all (a curved part, whose consistent poses may
+                never narrow to one class) Default: 1.
             rotation_free (bool | Unset): true when the class' outline is round (a disc): every rotation is one class, the
                 bound's rotation is pi and the accuracy asks for the translation only Default: False.
      """
@@ -41,6 +46,7 @@ class LocalizationOut:
     bound: ErrorBoundOut | None
     classes: int
     missing: list[LocalizationOutMissingItem]
+    covered: int | Unset = 1
     rotation_free: bool | Unset = False
     additional_properties: dict[str, Any] = _attrs_field(init=False, factory=dict)
 
@@ -65,6 +71,8 @@ class LocalizationOut:
 
 
 
+        covered = self.covered
+
         rotation_free = self.rotation_free
 
 
@@ -75,6 +83,8 @@ class LocalizationOut:
             "classes": classes,
             "missing": missing,
         })
+        if covered is not UNSET:
+            field_dict["covered"] = covered
         if rotation_free is not UNSET:
             field_dict["rotation_free"] = rotation_free
 
@@ -116,12 +126,15 @@ class LocalizationOut:
             missing.append(missing_item)
 
 
+        covered = d.pop("covered", UNSET)
+
         rotation_free = d.pop("rotation_free", UNSET)
 
         localization_out = cls(
             bound=bound,
             classes=classes,
             missing=missing,
+            covered=covered,
             rotation_free=rotation_free,
         )
 

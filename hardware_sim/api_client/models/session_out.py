@@ -42,7 +42,8 @@ class SessionOut:
             hypothesis_count (int):
             id (str):
             localization (LocalizationOut): How far the session is from `localized` (one class AND its bound within the
-                accuracy): the classes left, the most probable class' bound, what is missing.
+                accuracy, or classes that are one answer within it): the classes left, the
+                answer's bound, what is missing.
             max_outliers (int):
             objects (list[str]):
             observations (list[ObservationOut]):

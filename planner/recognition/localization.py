@@ -1,0 +1,158 @@
+"""How far a session is from `localized` (DESIGN §2), and the one answer that
+several classes of a curved part's pose can make.
+
+A session is localized when one equivalence class is left and its bound is
+within the session's accuracy. On a curved part the hypotheses fill a continuum
+of nearby poses of one part: with bounded errors the poses every contact admits
+lie within ``eps_d`` of the true outline at the contacts, so two of them may
+differ by about ``tau = 2 eps_d`` there and by more between the contacts, and
+the classes (never wider than ``tau``) may never come down to one however many
+touches are taken. Those classes are one answer when they are all the best
+hypothesis' part in its stable pose and one bound covers them all within the
+accuracy: the true pose lies within some hypothesis' bound, and the answer's
+bound holds every hypothesis' bound, so it holds the truth whichever class is
+right, and no touch can move the answer by more than the user asked for.
+
+The answer's bound adds to each hypothesis' own bound how far it lies from the
+answer: its outline's distance from the best one's (at every probing height) on
+the translation and twice that on the outline disk, its turn from the nearest
+member of the best class on the rotation (a member of that class is the answer
+turned by a symmetry of the outline) -- as the class bound adds ``tau / 2``
+for its members.
+
+Cost: nothing unless several classes are left, all of the best part's stable
+pose, each hypothesis' own bound within the accuracy; then one pass of the
+outline kernel over the hypotheses outside the best class.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Sequence
+from dataclasses import astuple, dataclass
+
+import numpy as np
+
+from planner.geometry import rotation_matrices, wrap_angle
+from planner.recognition.equivalence import EDGE_SAMPLES, PosedRings, pair_distances
+from planner.types import Accuracy, ErrorBound, Hypothesis, StablePose
+
+__all__ = ["GAP_STEP", "Localization", "answer_bound", "class_bound"]
+
+#: The most spacing of the points at which an answer measures how far a class'
+#: outline lies from the best one, as a share of the symmetry tolerance; the
+#: distance is widened by half of it (a point between two measured ones).
+GAP_STEP = 0.125
+
+
+@dataclass(frozen=True)
+class Localization:
+    """How far a session is from `localized` (DESIGN §2): the number of equivalence
+    `classes` left, the `bound` of the answer (None without a hypothesis), the
+    required `accuracy`, and what is `missing`: ``one_class`` while several
+    classes are left that are not one answer within the accuracy, ``accuracy``
+    while the one class' bound exceeds it. The bound is the most probable class'
+    own, or, when the classes left are one answer, the bound covering them all;
+    `covered` says how many classes it covers. `rotation_free` when the class'
+    outline is round (:mod:`planner.models.round`): its rotation cannot be
+    measured and need not be, the bound's rotation is then pi and the accuracy
+    asks for the translation only."""
+
+    classes: int
+    bound: ErrorBound | None
+    accuracy: Accuracy
+    missing: tuple[str, ...]
+    rotation_free: bool = False
+    covered: int = 1
+
+
+def class_bound(members: Sequence[Hypothesis], half: float, free: bool) -> ErrorBound:
+    """The bound of a class: the widest member's, widened by `half` (how far a
+    member's outline may lie from its leader's) on the translation and twice that
+    on the outline disk; the rotation is pi when `free`."""
+    return ErrorBound(
+        max(h.error_bound.translation for h in members) + half,
+        math.pi if free else max(h.error_bound.rotation for h in members),
+        max(h.error_bound.eps_t for h in members) + 2 * half,
+    )
+
+
+def answer_bound(
+    hypotheses: Sequence[Hypothesis],
+    bound: ErrorBound,
+    accuracy: Accuracy,
+    layers: Callable[[str, int], Sequence[StablePose]],
+    tau: float,
+    free: bool,
+) -> ErrorBound | None:
+    """The bound of one answer covering every class of `hypotheses` (most probable
+    first, their classes numbered), given the best class' own `bound`; None when
+    the classes are not one answer within `accuracy` (another part or stable pose
+    is left, or the bound exceeds it). `layers(object, stable_pose)` gives the
+    outline at each probing height; `tau` is the symmetry tolerance (it sets the
+    spacing of the points measured along the faces, `GAP_STEP`)."""
+    best = hypotheses[0]
+    others = [h for h in hypotheses if h.equivalence_class != best.equivalence_class]
+    if not others:
+        return bound
+    same = all(h.object == best.object and h.stable_pose == best.stable_pose for h in others)
+    if not same or not all(accuracy.admits(h.error_bound, rotation_free=free) for h in others):
+        return None
+    theta = np.array([best.pose.theta] + [h.pose.theta for h in others])
+    t = np.array([(best.pose.x, best.pose.y)] + [(h.pose.x, h.pose.y) for h in others])
+    apart = np.zeros(len(others))
+    for layer in layers(best.object, best.stable_pose):
+        apart = np.maximum(apart, _outline_gaps(layer, theta, t, GAP_STEP * tau))
+    own = np.array([astuple(h.error_bound) for h in others])  # translation, rotation, eps_t
+    turned = math.pi
+    if not free:
+        klass = best.equivalence_class
+        turns = np.array([h.pose.theta for h in hypotheses if h.equivalence_class == klass])
+        gap = np.abs(wrap_angle(theta[1:, None] - turns[None, :]))
+        turned = float(max(bound.rotation, (own[:, 1] + gap.min(axis=1)).max()))
+    union = ErrorBound(
+        float(max(bound.translation, (own[:, 0] + apart).max())),
+        turned,
+        float(max(bound.eps_t, (own[:, 2] + 2 * apart).max())),
+    )
+    return union if accuracy.admits(union, rotation_free=free) else None
+
+
+@dataclass(frozen=True)
+class _Faces:
+    start: np.ndarray
+    end: np.ndarray
+
+
+@dataclass(frozen=True)
+class _Split:
+    """An outline's faces split so that the points measured along them lie `step`
+    apart at most (what :meth:`PosedRings.of` reads of a stable pose)."""
+
+    faces: _Faces
+
+    @classmethod
+    def of(cls, layer: StablePose, step: float) -> _Split:
+        a, b = np.asarray(layer.faces.start, float), np.asarray(layer.faces.end, float)
+        pieces = np.ceil(np.hypot(*(b - a).T) / ((EDGE_SAMPLES + 1) * step)).astype(np.int64)
+        pieces = np.maximum(pieces, 1)
+        face = np.repeat(np.arange(len(a)), pieces)
+        k = np.arange(len(face)) - np.repeat(np.cumsum(pieces) - pieces, pieces)
+        u0, u1 = k / pieces[face], (k + 1) / pieces[face]
+        d = (b - a)[face]
+        return cls(_Faces(a[face] + u0[:, None] * d, a[face] + u1[:, None] * d))
+
+
+def _outline_gaps(layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float) -> np.ndarray:
+    """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
+    at ``theta[0], t[0]`` (a Hausdorff distance bounded above): the smaller of the
+    distance measured at points at most `step` apart along the faces, widened by
+    half that step, and the largest displacement of a vertex (a point along a face
+    moves by at most its ends' larger move)."""
+    rings = PosedRings.of(_Split.of(layer, step), theta, t, step)  # type: ignore[arg-type]
+    rows = np.arange(1, len(theta))
+    measured = pair_distances(rings, np.zeros_like(rows), rings, rows) + rings.gap / 2
+    vertices = np.asarray(layer.faces.start, dtype=float)
+    R = rotation_matrices(theta)
+    moved = np.einsum("nij,mj->nmi", R[1:] - R[:1], vertices) + (t[1:] - t[:1])[:, None, :]
+    return np.minimum(measured, np.hypot(moved[..., 0], moved[..., 1]).max(axis=1))
