@@ -19,14 +19,7 @@ import math
 from dataclasses import dataclass
 from typing import Annotated, Any, Literal
 
-from pydantic import (
-    BaseModel,
-    ConfigDict,
-    Discriminator,
-    Field,
-    Tag,
-    model_validator,
-)
+from pydantic import BaseModel, ConfigDict, Discriminator, Field, Tag, model_validator
 
 from app.schema_examples import OBJECT_EXAMPLES, OBSERVATION_EXAMPLES, SESSION_EXAMPLES
 from app.schema_rules import NOT_ZERO, ONE_POSE_FORM, ONE_SHAPE, only_one_shape
@@ -147,31 +140,28 @@ class AccuracyOut(BaseModel):
 
 
 class LocalizationOut(BaseModel):
-    """How far the session is from `localized` (one class AND its bound within the
-    accuracy, or classes that are one answer within it): the classes left, the
-    answer's bound, what is missing."""
+    """How far the session is from `localized` (one class, or classes that are one
+    answer, AND the bound within the accuracy): classes left, bound, what is missing."""
 
     classes: int = Field(ge=0)
     bound: ErrorBoundOut | None = Field(
-        description="the answer's bound: the most probable class' (its widest member's, "
-        "widened by the symmetry tolerance), or, when the classes left are one answer, "
-        "the bound covering them all; null without a hypothesis"
+        description="the most probable class' bound (its widest member's, widened by the "
+        "symmetry tolerance), or the one covering classes that are one answer; null "
+        "without a hypothesis"
     )
     missing: list[Literal["one_class", "accuracy"]] = Field(
         description="empty when localized; one_class while several classes are left that "
         "are not one answer within the accuracy, accuracy while the bound exceeds it"
     )
-    covered: int = Field(
-        default=1,
-        ge=0,
-        description="how many classes the bound covers: more than one when the classes "
-        "left are the same part in nearby poses and one bound within the accuracy holds "
-        "them all (a curved part, whose consistent poses may never narrow to one class)",
-    )
     rotation_free: bool = Field(
         default=False,
         description="true when the class' outline is round (a disc): every rotation is one "
         "class, the bound's rotation is pi and the accuracy asks for the translation only",
+    )
+    covered: int = Field(
+        default=1,
+        ge=0,
+        description="how many classes the bound covers (one part's nearby poses: a curve's)",
     )
 
 

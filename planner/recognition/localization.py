@@ -34,15 +34,24 @@ from dataclasses import astuple, dataclass
 import numpy as np
 
 from planner.geometry import rotation_matrices, wrap_angle
-from planner.recognition.equivalence import EDGE_SAMPLES, PosedRings, pair_distances
+from planner.recognition.equivalence import (
+    CHUNK_ELEMENTS,
+    EDGE_SAMPLES,
+    PosedRings,
+    pair_distances,
+)
 from planner.types import Accuracy, ErrorBound, Hypothesis, StablePose
 
-__all__ = ["GAP_STEP", "Localization", "answer_bound", "class_bound"]
+__all__ = ["ANSWER_POINTS", "GAP_STEP", "Localization", "answer_bound", "class_bound"]
 
 #: The most spacing of the points at which an answer measures how far a class'
 #: outline lies from the best one, as a share of the symmetry tolerance; the
 #: distance is widened by half of it (a point between two measured ones).
 GAP_STEP = 0.125
+#: The most points measured along one outline for an answer: the spacing widens
+#: (and the bound with it, by half the spacing) rather than the work grow, as
+#: with exact sensing, whose tolerance is a rounding error.
+ANSWER_POINTS = 4096
 
 
 @dataclass(frozen=True)
@@ -146,13 +155,20 @@ class _Split:
 def _outline_gaps(layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float) -> np.ndarray:
     """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
     at ``theta[0], t[0]`` (a Hausdorff distance bounded above): the smaller of the
-    distance measured at points at most `step` apart along the faces, widened by
-    half that step, and the largest displacement of a vertex (a point along a face
-    moves by at most its ends' larger move)."""
-    rings = PosedRings.of(_Split.of(layer, step), theta, t, step)  # type: ignore[arg-type]
-    rows = np.arange(1, len(theta))
-    measured = pair_distances(rings, np.zeros_like(rows), rings, rows) + rings.gap / 2
-    vertices = np.asarray(layer.faces.start, dtype=float)
+    distance measured at points at most `step` apart along the faces (farther when
+    `ANSWER_POINTS` would not reach), widened by half that step, and the largest
+    displacement of a vertex (a point along a face moves by at most its ends'
+    larger move). The poses are posed `CHUNK_ELEMENTS` face ends at a time."""
+    a, b = np.asarray(layer.faces.start, float), np.asarray(layer.faces.end, float)
+    split = _Split.of(layer, max(step, float(np.hypot(*(b - a).T).sum()) / ANSWER_POINTS))
     R = rotation_matrices(theta)
-    moved = np.einsum("nij,mj->nmi", R[1:] - R[:1], vertices) + (t[1:] - t[:1])[:, None, :]
-    return np.minimum(measured, np.hypot(moved[..., 0], moved[..., 1]).max(axis=1))
+    out = np.empty(len(theta) - 1)
+    chunk = max(1, CHUNK_ELEMENTS // len(split.faces.start))
+    for lo in range(1, len(theta), chunk):
+        rows = np.r_[0, lo : min(lo + chunk, len(theta))]
+        rings = PosedRings.of(split, theta[rows], t[rows], step)  # type: ignore[arg-type]
+        at = np.arange(1, len(rows))
+        measured = pair_distances(rings, np.zeros_like(at), rings, at) + rings.gap / 2
+        moved = np.einsum("nij,mj->nmi", R[rows[1:]] - R[:1], a) + (t[rows[1:]] - t[:1])[:, None]
+        out[rows[1:] - 1] = np.minimum(measured, np.hypot(*moved.transpose(2, 0, 1)).max(axis=1))
+    return out

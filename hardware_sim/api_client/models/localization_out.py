@@ -25,20 +25,16 @@ T = TypeVar("T", bound="LocalizationOut")
 
 @_attrs_define
 class LocalizationOut:
-    """ How far the session is from `localized` (one class AND its bound within the
-    accuracy, or classes that are one answer within it): the classes left, the
-    answer's bound, what is missing.
+    """ How far the session is from `localized` (one class, or classes that are one
+    answer, AND the bound within the accuracy): classes left, bound, what is missing.
 
         Attributes:
-            bound (ErrorBoundOut | None): the answer's bound: the most probable class' (its widest member's, widened by the
-                symmetry tolerance), or, when the classes left are one answer, the bound covering them all; null without a
-                hypothesis
+            bound (ErrorBoundOut | None): the most probable class' bound (its widest member's, widened by the symmetry
+                tolerance), or the one covering classes that are one answer; null without a hypothesis
             classes (int):
             missing (list[LocalizationOutMissingItem]): empty when localized; one_class while several classes are left that
                 are not one answer within the accuracy, accuracy while the bound exceeds it
-            covered (int | Unset): how many classes the bound covers: more than one when the classes left are the same part
-                in nearby poses and one bound within the accuracy holds them all (a curved part, whose consistent poses may
-                never narrow to one class) Default: 1.
+            covered (int | Unset): how many classes the bound covers (one part's nearby poses: a curve's) Default: 1.
             rotation_free (bool | Unset): true when the class' outline is round (a disc): every rotation is one class, the
                 bound's rotation is pi and the accuracy asks for the translation only Default: False.
      """

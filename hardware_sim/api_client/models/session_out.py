@@ -41,9 +41,8 @@ class SessionOut:
             hypotheses (list[HypothesisOut]):
             hypothesis_count (int):
             id (str):
-            localization (LocalizationOut): How far the session is from `localized` (one class AND its bound within the
-                accuracy, or classes that are one answer within it): the classes left, the
-                answer's bound, what is missing.
+            localization (LocalizationOut): How far the session is from `localized` (one class, or classes that are one
+                answer, AND the bound within the accuracy): classes left, bound, what is missing.
             max_outliers (int):
             objects (list[str]):
             observations (list[ObservationOut]):
