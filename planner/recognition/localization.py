@@ -28,8 +28,8 @@ outline kernel over the hypotheses outside the best class.
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
-from dataclasses import astuple, dataclass
+from collections.abc import Callable, Iterator, Sequence
+from dataclasses import dataclass
 
 import numpy as np
 
@@ -39,6 +39,7 @@ from planner.recognition.equivalence import (
     EDGE_SAMPLES,
     PosedRings,
     pair_distances,
+    pairs_within,
 )
 from planner.types import Accuracy, ErrorBound, Hypothesis, StablePose
 
@@ -109,16 +110,22 @@ def answer_bound(
         return None
     theta = np.array([best.pose.theta] + [h.pose.theta for h in others])
     t = np.array([(best.pose.x, best.pose.y)] + [(h.pose.x, h.pose.y) for h in others])
-    apart = np.zeros(len(others))
-    for layer in layers(best.object, best.stable_pose):
-        apart = np.maximum(apart, _outline_gaps(layer, theta, t, GAP_STEP * tau))
-    own = np.array([astuple(h.error_bound) for h in others])  # translation, rotation, eps_t
+    own = np.array([(b.translation, b.rotation, b.eps_t) for b in (h.error_bound for h in others)])
     turned = math.pi
     if not free:
         klass = best.equivalence_class
         turns = np.array([h.pose.theta for h in hypotheses if h.equivalence_class == klass])
         gap = np.abs(wrap_angle(theta[1:, None] - turns[None, :]))
         turned = float(max(bound.rotation, (own[:, 1] + gap.min(axis=1)).max()))
+        if turned > accuracy.rotation:
+            return None
+    outlines = layers(best.object, best.stable_pose)
+    step = GAP_STEP * tau
+    # decided first (cheap: most such sessions are not one answer), then measured
+    room = accuracy.translation - own[:, 0]
+    if not all(_within(layer, theta, t, step, room) for layer in outlines):
+        return None
+    apart = np.max([_outline_gaps(layer, theta, t, step) for layer in outlines], axis=0)
     union = ErrorBound(
         float(max(bound.translation, (own[:, 0] + apart).max())),
         turned,
@@ -152,23 +159,59 @@ class _Split:
         return cls(_Faces(a[face] + u0[:, None] * d, a[face] + u1[:, None] * d))
 
 
-def _outline_gaps(layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float) -> np.ndarray:
-    """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
-    at ``theta[0], t[0]`` (a Hausdorff distance bounded above): the smaller of the
-    distance measured at points at most `step` apart along the faces (farther when
-    `ANSWER_POINTS` would not reach), widened by half that step, and the largest
-    displacement of a vertex (a point along a face moves by at most its ends'
-    larger move). The poses are posed `CHUNK_ELEMENTS` face ends at a time."""
+def _posed(
+    layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float
+) -> Iterator[tuple[np.ndarray, PosedRings, np.ndarray]]:
+    """The poses ``theta[1:], t[1:]`` in chunks of `CHUNK_ELEMENTS` face ends: the
+    indices (into ``theta[1:]``), the rings (the first pose, then the chunk's) with
+    the faces split `step` apart at most (farther when `ANSWER_POINTS` would not
+    reach), and each pose's largest vertex move from the first one."""
     a, b = np.asarray(layer.faces.start, float), np.asarray(layer.faces.end, float)
     split = _Split.of(layer, max(step, float(np.hypot(*(b - a).T).sum()) / ANSWER_POINTS))
     R = rotation_matrices(theta)
-    out = np.empty(len(theta) - 1)
     chunk = max(1, CHUNK_ELEMENTS // len(split.faces.start))
     for lo in range(1, len(theta), chunk):
         rows = np.r_[0, lo : min(lo + chunk, len(theta))]
         rings = PosedRings.of(split, theta[rows], t[rows], step)  # type: ignore[arg-type]
-        at = np.arange(1, len(rows))
-        measured = pair_distances(rings, np.zeros_like(at), rings, at) + rings.gap / 2
         moved = np.einsum("nij,mj->nmi", R[rows[1:]] - R[:1], a) + (t[rows[1:]] - t[:1])[:, None]
-        out[rows[1:] - 1] = np.minimum(measured, np.hypot(*moved.transpose(2, 0, 1)).max(axis=1))
+        yield rows[1:] - 1, rings, np.hypot(*moved.transpose(2, 0, 1)).max(axis=1)
+
+
+def _outline_gaps(layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float) -> np.ndarray:
+    """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
+    at ``theta[0], t[0]`` (a Hausdorff distance bounded above): the smaller of the
+    distance measured at points at most `step` apart along the faces, widened by
+    half that step, and the largest displacement of a vertex (a point along a face
+    moves by at most its ends' larger move)."""
+    out = np.empty(len(theta) - 1)
+    for index, rings, moved in _posed(layer, theta, t, step):
+        at = np.arange(1, len(index) + 1)
+        measured = pair_distances(rings, np.zeros_like(at), rings, at) + rings.gap / 2
+        out[index] = np.minimum(measured, moved)
     return out
+
+
+def _within(
+    layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float, room: np.ndarray
+) -> bool:
+    """Whether ``_outline_gaps(layer, theta, t, step) <= room`` for every pose,
+    decided without measuring what the answer does not need: a pose whose vertices
+    move less is within; the others are measured only as far as the least room."""
+    for index, rings, moved in _posed(layer, theta, t, step):
+        half, limit = rings.gap / 2, room[index]
+        rest = np.flatnonzero(moved > limit) + 1
+        if not len(rest):
+            continue
+        least = float(limit[rest - 1].min()) - half
+        if least < 0:
+            return False
+        near = pairs_within(rings, np.zeros_like(rest), rings, rest, least)
+        far = rest[~near]
+        if (
+            len(far)
+            and (
+                pair_distances(rings, np.zeros_like(far), rings, far) + half > limit[far - 1]
+            ).any()
+        ):
+            return False
+    return True

@@ -15,7 +15,7 @@ from hypothesis import strategies as st
 
 from planner.codec import observation_from_dict
 from planner.models.library import object_from_dict
-from planner.recognition.localization import _outline_gaps, answer_bound
+from planner.recognition.localization import _outline_gaps, _within, answer_bound
 from planner.recognition.session import Session
 from planner.types import Accuracy, ErrorBound, Hypothesis, Pose, SensorBounds, Workspace
 from tests.planner.recognition.test_equivalence import models_of, outline_gap, posed, touched
@@ -81,6 +81,21 @@ def test_how_far_a_class_lies_is_never_underestimated(seed, name, spread, step):
         other = shapely.Polygon(rotate_posed(stable.outline, theta[k], t[k]))
         exact = shapely.hausdorff_distance(first.boundary, other.boundary, densify=0.01)
         assert got[k - 1] >= exact - 1e-6
+
+
+@settings(max_examples=60, deadline=None)
+@given(st.integers(0, 2**16), st.sampled_from(["d_shape", "stadium", "ellipse_60x35"]))
+def test_the_decision_is_the_measure_held_to_the_room(seed, name):
+    """`_within` decides without measuring what it need not: its answer must be
+    that of the measured distances against each pose's room."""
+    (model,) = [m for m in models_of("curved") if m.name == name]
+    stable = model.stable_poses[0]
+    rng = np.random.default_rng(seed)
+    theta = rng.normal(0, 0.02, 8) + np.pi * rng.integers(0, 2, 8)
+    t = rng.normal(0, 1.0, (8, 2))
+    gaps = _outline_gaps(stable, theta, t, 0.3)
+    for room in (gaps * rng.uniform(0.9, 1.2, 7), np.full(7, np.median(gaps)), gaps):
+        assert _within(stable, theta, t, 0.3, room) == bool((gaps <= room).all())
 
 
 def rotate_posed(outline, theta, t):
