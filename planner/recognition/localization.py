@@ -12,6 +12,8 @@ hypothesis' part in its stable pose and one bound covers them all within the
 accuracy: the true pose lies within some hypothesis' bound, and the answer's
 bound holds every hypothesis' bound, so it holds the truth whichever class is
 right, and no touch can move the answer by more than the user asked for.
+With the thesis' fixed error disk (whose accuracy asks for nothing beyond one
+class, as the thesis did) the session never asks for one answer.
 
 The answer's bound adds to each hypothesis' own bound how far it lies from the
 answer: its outline's distance from the best one's (at every probing height) on

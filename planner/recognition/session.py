@@ -461,7 +461,7 @@ class Session:
         # a round outline's rotation is free: every rotation is one class
         free = all(self._round_poses[h.object][h.stable_pose] for h in members)
         bound = class_bound(members, half, free)
-        if classes > 1:
+        if classes > 1 and self.config.bound_mode != "thesis":  # the thesis: one class
             union = answer_bound(
                 hyps, bound, self.accuracy, self._layers, self.symmetry_tolerance, free
             )

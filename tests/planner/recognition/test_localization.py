@@ -13,11 +13,14 @@ import shapely
 from hypothesis import given, settings
 from hypothesis import strategies as st
 
+from hardware_sim.world import random_world
 from planner.codec import observation_from_dict
 from planner.models.library import object_from_dict
+from planner.recognition.config import RecognitionConfig
 from planner.recognition.localization import _outline_gaps, _within, answer_bound
 from planner.recognition.session import Session
 from planner.types import Accuracy, ErrorBound, Hypothesis, Pose, SensorBounds, Workspace
+from tests.conftest import WORKSPACE
 from tests.planner.recognition.test_equivalence import models_of, outline_gap, posed, touched
 
 SQUARE = object_from_dict({"name": "sq", "outline": [[-20, -20], [20, -20], [20, 20], [-20, 20]]})
@@ -152,3 +155,21 @@ def test_one_answer_holds_every_hypothesis_and_the_truth():
             gap = outline_gap(best, posed(session, h))
             assert gap + h.error_bound.eps_t / 2 <= loc.bound.eps_t / 2 + 0.05
     assert answers >= 5  # 10 of these 40 sessions end as one answer of several classes
+
+
+def test_the_thesis_fixed_disk_asks_for_one_class():
+    """With the thesis' fixed error disk the accuracy asks for nothing beyond one
+    class (as the thesis did): classes are never one answer there."""
+    models, several = models_of("curved"), 0
+    config = RecognitionConfig(bound_mode="thesis", thesis_fraction=0.1)
+    for seed in range(40):
+        world = random_world(models, WORKSPACE, np.random.default_rng(7000 + seed))
+        rng = np.random.default_rng(seed)
+        exact = SensorBounds(0.0, 0.0)
+        session = Session(models, exact, WORKSPACE, config)
+        for _ in range(2):
+            session = session.observe(world.execute(world.hitting_path(rng), exact, rng)[0])
+        loc = session.localization
+        several += loc.classes > 1
+        assert loc.covered == 1 and (session.status == "localized") == (loc.classes == 1)
+    assert several >= 5
