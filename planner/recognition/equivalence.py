@@ -141,13 +141,19 @@ class PosedRings:
 
     @classmethod
     def of(
-        cls, stable: StablePose, theta: np.ndarray, t: np.ndarray, spacing: float = 0.0
+        cls,
+        stable: StablePose,
+        theta: np.ndarray,
+        t: np.ndarray,
+        spacing: float = 0.0,
+        most: float = EDGE_SAMPLES,
     ) -> PosedRings:
         """The stable pose moved to each pose (theta (N,), t (N, 2)):
-        ``v_world = R(theta) v_model + t``. A face holds `EDGE_SAMPLES` points
-        inside, or fewer where they would lie closer than `spacing` (the short faces
-        of a finely drawn curve): any point of a face then lies within
-        ``max(spacing, gap) / 2`` of a measured one."""
+        ``v_world = R(theta) v_model + t``. A face holds `most` points inside, or
+        fewer where they would lie closer than `spacing` (the short faces of a
+        finely drawn curve): any point of a face then lies within
+        ``max(spacing, gap) / 2`` of a measured one (within ``spacing / 2`` when
+        `most` is unbounded)."""
         theta = np.asarray(theta, dtype=float).reshape(-1)
         R = rotation_matrices(theta)
         t = np.asarray(t, dtype=float).reshape(-1, 2)
@@ -155,7 +161,7 @@ class PosedRings:
         a, b = np.asarray(faces.start, dtype=float), np.asarray(faces.end, dtype=float)
         length = np.hypot(*(b - a).T)
         room = np.floor(length / spacing) if spacing > 0 else np.full(len(length), np.inf)
-        inside = np.minimum(EDGE_SAMPLES, room)
+        inside = np.minimum(most, room)
         steps = inside.astype(np.int64) + 1
         along = _along(a, b, steps, ends=False)  # the next face's start is this one's end
         starts = _moved(R, a, t)

@@ -22,15 +22,20 @@ member of the best class on the rotation (a member of that class is the answer
 turned by a symmetry of the outline) -- as the class bound adds ``tau / 2``
 for its members.
 
+The outline distance is bounded above: measured at points at most ``tau / 8``
+apart along the faces and widened by half that, or the largest move of a vertex
+when that is smaller.
+
 Cost: nothing unless several classes are left, all of the best part's stable
-pose, each hypothesis' own bound within the accuracy; then one pass of the
-outline kernel over the hypotheses outside the best class.
+pose, each hypothesis' own bound and turn within the accuracy; then the outline
+kernel decides, breaking off early, whether every one fits, and only then
+measures them.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Iterator, Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,7 +43,6 @@ import numpy as np
 from planner.geometry import rotation_matrices, wrap_angle
 from planner.recognition.equivalence import (
     CHUNK_ELEMENTS,
-    EDGE_SAMPLES,
     PosedRings,
     pair_distances,
     pairs_within,
@@ -121,13 +125,14 @@ def answer_bound(
         turned = float(max(bound.rotation, (own[:, 1] + gap.min(axis=1)).max()))
         if turned > accuracy.rotation:
             return None
-    outlines = layers(best.object, best.stable_pose)
-    step = GAP_STEP * tau
-    # decided first (cheap: most such sessions are not one answer), then measured
+    # each pose's room: what the accuracy leaves of its own translation bound
     room = accuracy.translation - own[:, 0]
-    if not all(_within(layer, theta, t, step, room) for layer in outlines):
-        return None
-    apart = np.max([_outline_gaps(layer, theta, t, step) for layer in outlines], axis=0)
+    apart = np.zeros(len(others))
+    for layer in layers(best.object, best.stable_pose):
+        found = _gaps_within(layer, theta, t, GAP_STEP * tau, room)
+        if found is None:
+            return None
+        apart = np.maximum(apart, found)
     union = ErrorBound(
         float(max(bound.translation, (own[:, 0] + apart).max())),
         turned,
@@ -136,84 +141,41 @@ def answer_bound(
     return union if accuracy.admits(union, rotation_free=free) else None
 
 
-@dataclass(frozen=True)
-class _Faces:
-    start: np.ndarray
-    end: np.ndarray
-
-
-@dataclass(frozen=True)
-class _Split:
-    """An outline's faces split so that the points measured along them lie `step`
-    apart at most (what :meth:`PosedRings.of` reads of a stable pose)."""
-
-    faces: _Faces
-
-    @classmethod
-    def of(cls, layer: StablePose, step: float) -> _Split:
-        a, b = np.asarray(layer.faces.start, float), np.asarray(layer.faces.end, float)
-        pieces = np.ceil(np.hypot(*(b - a).T) / ((EDGE_SAMPLES + 1) * step)).astype(np.int64)
-        pieces = np.maximum(pieces, 1)
-        face = np.repeat(np.arange(len(a)), pieces)
-        k = np.arange(len(face)) - np.repeat(np.cumsum(pieces) - pieces, pieces)
-        u0, u1 = k / pieces[face], (k + 1) / pieces[face]
-        d = (b - a)[face]
-        return cls(_Faces(a[face] + u0[:, None] * d, a[face] + u1[:, None] * d))
-
-
-def _posed(
-    layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float
-) -> Iterator[tuple[np.ndarray, PosedRings, np.ndarray]]:
-    """The poses ``theta[1:], t[1:]`` in chunks of `CHUNK_ELEMENTS` face ends: the
-    indices (into ``theta[1:]``), the rings (the first pose, then the chunk's) with
-    the faces split `step` apart at most (farther when `ANSWER_POINTS` would not
-    reach), and each pose's largest vertex move from the first one."""
+def _gaps_within(
+    layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float, room: np.ndarray
+) -> np.ndarray | None:
+    """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
+    at ``theta[0], t[0]`` (a Hausdorff distance bounded above), or None as soon as
+    one lies farther than its `room`. The bound is the smaller of the distance
+    measured at points at most `step` apart along the faces (farther when
+    `ANSWER_POINTS` would not reach), widened by half the spacing, and the largest
+    move of a vertex (a point along a face moves by at most its ends' larger
+    move). Decided before it is measured (most sessions of several classes are
+    not one answer): a pose whose vertices move less than its room is within, the
+    others are measured only as far as the least room; then, all within, every
+    pose is measured. The poses are posed `CHUNK_ELEMENTS` face ends at a time."""
     a, b = np.asarray(layer.faces.start, float), np.asarray(layer.faces.end, float)
-    split = _Split.of(layer, max(step, float(np.hypot(*(b - a).T).sum()) / ANSWER_POINTS))
+    step = max(step, float(np.hypot(*(b - a).T).sum()) / ANSWER_POINTS)
     R = rotation_matrices(theta)
-    chunk = max(1, CHUNK_ELEMENTS // len(split.faces.start))
+    out = np.empty(len(theta) - 1)
+    chunk = max(1, CHUNK_ELEMENTS // len(a))
     for lo in range(1, len(theta), chunk):
         rows = np.r_[0, lo : min(lo + chunk, len(theta))]
-        rings = PosedRings.of(split, theta[rows], t[rows], step)  # type: ignore[arg-type]
+        index = rows[1:] - 1  # into theta[1:] (and `room`)
+        rings = PosedRings.of(layer, theta[rows], t[rows], step, most=math.inf)
         moved = np.einsum("nij,mj->nmi", R[rows[1:]] - R[:1], a) + (t[rows[1:]] - t[:1])[:, None]
-        yield rows[1:] - 1, rings, np.hypot(*moved.transpose(2, 0, 1)).max(axis=1)
-
-
-def _outline_gaps(layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float) -> np.ndarray:
-    """How far the outline posed at each of ``theta[1:], t[1:]`` may lie from the one
-    at ``theta[0], t[0]`` (a Hausdorff distance bounded above): the smaller of the
-    distance measured at points at most `step` apart along the faces, widened by
-    half that step, and the largest displacement of a vertex (a point along a face
-    moves by at most its ends' larger move)."""
-    out = np.empty(len(theta) - 1)
-    for index, rings, moved in _posed(layer, theta, t, step):
-        at = np.arange(1, len(index) + 1)
-        measured = pair_distances(rings, np.zeros_like(at), rings, at) + rings.gap / 2
+        moved = np.hypot(moved[..., 0], moved[..., 1]).max(axis=1)
+        half, limit = rings.gap / 2, room[index]
+        rest = np.flatnonzero(moved > limit) + 1  # the rings' rows left to decide
+        if len(rest):
+            least = float(limit[rest - 1].min()) - half
+            if least < 0:
+                return None
+            far = rest[~pairs_within(rings, np.zeros_like(rest), rings, rest, least)]
+            beyond = pair_distances(rings, np.zeros_like(far), rings, far) + half
+            if (beyond > limit[far - 1]).any():
+                return None
+        at = np.arange(1, len(rows))
+        measured = pair_distances(rings, np.zeros_like(at), rings, at) + half
         out[index] = np.minimum(measured, moved)
     return out
-
-
-def _within(
-    layer: StablePose, theta: np.ndarray, t: np.ndarray, step: float, room: np.ndarray
-) -> bool:
-    """Whether ``_outline_gaps(layer, theta, t, step) <= room`` for every pose,
-    decided without measuring what the answer does not need: a pose whose vertices
-    move less is within; the others are measured only as far as the least room."""
-    for index, rings, moved in _posed(layer, theta, t, step):
-        half, limit = rings.gap / 2, room[index]
-        rest = np.flatnonzero(moved > limit) + 1
-        if not len(rest):
-            continue
-        least = float(limit[rest - 1].min()) - half
-        if least < 0:
-            return False
-        near = pairs_within(rings, np.zeros_like(rest), rings, rest, least)
-        far = rest[~near]
-        if (
-            len(far)
-            and (
-                pair_distances(rings, np.zeros_like(far), rings, far) + half > limit[far - 1]
-            ).any()
-        ):
-            return False
-    return True

@@ -17,7 +17,7 @@ from hardware_sim.world import random_world
 from planner.codec import observation_from_dict
 from planner.models.library import object_from_dict
 from planner.recognition.config import RecognitionConfig
-from planner.recognition.localization import _outline_gaps, _within, answer_bound
+from planner.recognition.localization import _gaps_within, answer_bound
 from planner.recognition.session import Session
 from planner.types import Accuracy, ErrorBound, Hypothesis, Pose, SensorBounds, Workspace
 from tests.conftest import WORKSPACE
@@ -78,7 +78,7 @@ def test_how_far_a_class_lies_is_never_underestimated(seed, name, spread, step):
     rng = np.random.default_rng(seed)
     theta = rng.normal(0, 0.02 * spread, 6) + np.pi * rng.integers(0, 2, 6)
     t = rng.normal(0, spread, (6, 2))
-    got = _outline_gaps(stable, theta, t, step)
+    got = _gaps_within(stable, theta, t, step, np.full(5, np.inf))
     first = shapely.Polygon(rotate_posed(stable.outline, theta[0], t[0]))
     for k in range(1, 6):
         other = shapely.Polygon(rotate_posed(stable.outline, theta[k], t[k]))
@@ -86,19 +86,35 @@ def test_how_far_a_class_lies_is_never_underestimated(seed, name, spread, step):
         assert got[k - 1] >= exact - 1e-6
 
 
+def test_a_farthest_point_between_the_measured_ones_is_covered_by_their_spacing():
+    # the tabbed plate turned a little: its outlines lie farthest apart between two
+    # of the points measured 6 apart (8.66 there, 8.70 in truth), nearer than the
+    # vertices move (9.85); half the spacing covers it
+    (model,) = [m for m in models_of("twins") if m.name == "plate_tab"]
+    stable = model.stable_poses[0]
+    theta, t = np.array([0.0, 0.07373185312159015]), np.array([[0, 0], [-3.73326442, 3.39369798]])
+    (got,) = _gaps_within(stable, theta, t, 6.0, np.full(1, np.inf))
+    first, other = (shapely.Polygon(rotate_posed(stable.outline, theta[k], t[k])) for k in (0, 1))
+    assert got >= shapely.hausdorff_distance(first.boundary, other.boundary, densify=0.01)
+
+
 @settings(max_examples=60, deadline=None)
 @given(st.integers(0, 2**16), st.sampled_from(["d_shape", "stadium", "ellipse_60x35"]))
 def test_the_decision_is_the_measure_held_to_the_room(seed, name):
-    """`_within` decides without measuring what it need not: its answer must be
-    that of the measured distances against each pose's room."""
+    """`_gaps_within` decides without measuring what it need not: its answer must
+    be that of the measured distances against each pose's room."""
     (model,) = [m for m in models_of("curved") if m.name == name]
     stable = model.stable_poses[0]
     rng = np.random.default_rng(seed)
     theta = rng.normal(0, 0.02, 8) + np.pi * rng.integers(0, 2, 8)
     t = rng.normal(0, 1.0, (8, 2))
-    gaps = _outline_gaps(stable, theta, t, 0.3)
+    gaps = _gaps_within(stable, theta, t, 0.3, np.full(7, np.inf))
     for room in (gaps * rng.uniform(0.9, 1.2, 7), np.full(7, np.median(gaps)), gaps):
-        assert _within(stable, theta, t, 0.3, room) == bool((gaps <= room).all())
+        found = _gaps_within(stable, theta, t, 0.3, room)
+        if (gaps <= room).all():
+            np.testing.assert_array_equal(found, gaps)
+        else:
+            assert found is None
 
 
 def rotate_posed(outline, theta, t):
